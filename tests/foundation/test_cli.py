@@ -1,0 +1,34 @@
+"""The command group: version, help on every command, the exit-code contract."""
+
+import subprocess
+import sys
+
+import pytest
+from click.testing import CliRunner
+
+import wipelab
+from wipelab.cli import COMMAND_MODULES, cli
+
+
+def test_version():
+    result = CliRunner().invoke(cli, ["--version"])
+    assert result.exit_code == 0
+    assert wipelab.__version__ in result.output
+
+
+@pytest.mark.parametrize("command", sorted(COMMAND_MODULES))
+def test_every_command_has_help(command):
+    result = CliRunner().invoke(cli, [command, "--help"])
+    assert result.exit_code == 0, result.output
+    assert "Usage: " in result.output and "--help" in result.output
+
+
+def test_unknown_command_is_a_usage_error():
+    result = CliRunner().invoke(cli, ["wipe-everything"])
+    assert result.exit_code == 2
+
+
+def test_console_script_runs():
+    completed = subprocess.run([sys.executable, "-m", "wipelab", "--version"],
+                               capture_output=True, text=True, check=True)
+    assert completed.stdout.strip() == f"wipelab, version {wipelab.__version__}"

@@ -1,0 +1,67 @@
+"""The ``wipelab`` command: a thin click layer over the stage functions.
+
+Each submodule defines the commands of one stage family; this module owns the group and
+the exit-code contract: 0 success, 2 bad input or usage (one line, no traceback),
+1 internal failure.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+import click
+
+import wipelab
+from wipelab.errors import InputError
+
+
+#: command name -> module that defines it (imported on first use, so that ``wipelab --version``
+#: or a cached pipeline step does not pay for importing OpenCV or PyBullet).
+COMMAND_MODULES = {
+    "synth": "wipelab.cli.vision_commands",
+    "track": "wipelab.cli.vision_commands",
+    "learn": "wipelab.cli.learn_commands",
+    "rollout": "wipelab.cli.learn_commands",
+    "adapt": "wipelab.cli.sim_commands",
+    "replay": "wipelab.cli.sim_commands",
+    "run": "wipelab.cli.pipeline_commands",
+    "dataset": "wipelab.cli.pipeline_commands",
+    "report": "wipelab.cli.pipeline_commands",
+    "view": "wipelab.cli.pipeline_commands",
+}
+
+
+class _WipelabGroup(click.Group):
+    """Lazily loads the stage commands; turns :class:`InputError` into one line and exit 2."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(COMMAND_MODULES)
+
+    def get_command(self, ctx: click.Context, name: str) -> click.Command | None:
+        module_name = COMMAND_MODULES.get(name)
+        if module_name is None:
+            return None
+        module = importlib.import_module(module_name)
+        return getattr(module, name.replace("-", "_"))
+
+    def invoke(self, ctx: click.Context):
+        try:
+            return super().invoke(ctx)
+        except InputError as error:
+            click.echo(f"error: {error}", err=True)
+            ctx.exit(2)
+
+
+@click.group(cls=_WipelabGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(wipelab.__version__, prog_name="wipelab")
+def cli() -> None:
+    """Teach a humanoid to wipe surfaces from a human demonstration.
+
+    Stages: synth -> track -> learn -> adapt -> replay; run/dataset chain them.
+    """
+
+
+def main() -> None:
+    """Console-script entry point."""
+    sys.exit(cli.main(prog_name="wipelab"))
