@@ -1,0 +1,380 @@
+"""``StageRecorder``: one MCAP file and one Rerun recording per stage run, side by side."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import uuid
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+import rerun as rr
+import rerun.blueprint as rrb
+
+from wipelab.logs import foxglove_messages as fx
+from wipelab.logs.mcap_log import McapLog, json_bytes, json_ready
+from wipelab.logs.rrd_file import capture_stream, deterministic_blueprint, write_canonical_rrd
+from wipelab.logs.timebase import seconds_array_to_ns, seconds_to_ns
+from wipelab.logs.video import access_units
+from wipelab.manifest import sha256_file
+
+#: Rerun application id of every recording.
+APPLICATION_ID = "wipelab"
+#: The data-time timeline (duration, seconds since the start of the recording).
+TIMELINE = "time"
+#: MCAP topic of all frame transforms; Rerun puts frame ``child`` on entity ``/tf/<child>``.
+TF_TOPIC = "/tf"
+#: The world frame (REP-103: x forward, y left, z up).
+WORLD_FRAME = "world"
+#: Rerun's frame of the root entity "/"; the world frame maps to it.
+RERUN_ROOT_FRAME = "tf#/"
+#: Suffix of the frame of a camera's image plane (as ``rerun mcap convert`` names it).
+IMAGE_PLANE_SUFFIX = "_image_plane"
+#: MCAP metadata record names.
+METADATA_STAGE, METADATA_PARAMETERS, METADATA_INPUTS = "wipelab.stage", "wipelab.parameters", "wipelab.inputs"
+#: Length of the axes drawn at a logged pose in Rerun (m).
+POSE_AXIS_LENGTH = 0.1
+
+_RECORDING_NAMESPACE = uuid.UUID("5f0c2a43-9a55-4c39-8d43-2b0f4ab1c7e2")
+_SCALARS_SCHEMA = "wipelab.Scalars"
+
+
+def _checked_topic(topic: str) -> str:
+    if not topic.startswith("/") or topic.endswith("/") or "//" in topic:
+        raise ValueError(f"topic {topic!r} must look like /a/b (leading '/', no empty parts)")
+    return topic
+
+
+def rerun_frame(frame_id: str) -> str:
+    """Rerun transform-frame name of an MCAP ``frame_id`` (``world`` is Rerun's root frame)."""
+    return RERUN_ROOT_FRAME if frame_id == WORLD_FRAME else frame_id
+
+
+def recording_id(stage: str, parameters: dict[str, Any], input_hashes: dict[str, str]) -> str:
+    """Deterministic Rerun recording id: uuid5 of stage, parameters and input hashes."""
+    key = json_bytes({"stage": stage, "parameters": parameters, "inputs": input_hashes}).decode()
+    return str(uuid.uuid5(_RECORDING_NAMESPACE, key))
+
+
+def default_blueprint() -> rrb.Blueprint:
+    """Layout for a stage that brings none: the 3D scene beside all time series."""
+    return rrb.Blueprint(rrb.Horizontal(rrb.Spatial3DView(origin="/", name="scene"),
+                                        rrb.TimeSeriesView(origin="/", name="series")),
+                         collapse_panels=True)
+
+
+class StageRecorder:
+    """Logs one stage run to ``<directory>/<stage>.mcap`` and ``<directory>/<stage>.rrd``.
+
+    Use as a context manager; both files are complete when the ``with`` block ends, also
+    when it raises. Times ``t`` are data time in seconds since the start of the recording
+    (``>= 0``); MCAP ``log_time`` (and ``publish_time``) is the same clock in nanoseconds,
+    Rerun logs it on the duration timeline ``"time"``. Each MCAP topic is also the Rerun
+    entity path (see :mod:`wipelab.logs` for the naming scheme).
+
+    Parameters
+    ----------
+    directory : existing directory to write into.
+    stage : stage name, also the file stem.
+    parameters : the stage's parameters (JSON-serialisable); MCAP metadata
+        ``wipelab.parameters`` (one key per parameter, JSON-encoded value).
+    inputs : role -> input file; MCAP metadata ``wipelab.inputs`` holds ``<role>.sha256`` and
+        ``<role>.file`` (base name). Parameters and input hashes make the recording id.
+    blueprint : the stage's default Rerun layout; :func:`default_blueprint` if None.
+    attachments : name -> file attached to the MCAP (calibration files, configs).
+
+    Attributes
+    ----------
+    rerun : rerun.RecordingStream
+        For anything the methods do not cover. Set the time yourself
+        (``rec.rerun.set_time("time", duration=t)``); the methods below move it too.
+    mcap_path, rrd_path : pathlib.Path
+    recording_id : str
+    """
+
+    def __init__(self, directory: str | os.PathLike, stage: str,
+                 parameters: dict[str, Any] | None = None,
+                 inputs: dict[str, str | os.PathLike] | None = None,
+                 blueprint: rrb.BlueprintLike | None = None,
+                 attachments: dict[str, str | os.PathLike] | None = None):
+        directory = Path(directory)
+        self.stage = stage
+        self.mcap_path = directory / f"{stage}.mcap"
+        self.rrd_path = directory / f"{stage}.rrd"
+        self._rrd_part = directory / f"{stage}.rrd.part"
+        self.parameters = json_ready(dict(parameters or {}))
+        input_paths = {role: Path(p) for role, p in sorted((inputs or {}).items())}
+        self.input_hashes = {role: sha256_file(p) for role, p in input_paths.items()}
+        self.recording_id = recording_id(stage, self.parameters, self.input_hashes)
+        self._closed = False
+
+        described_inputs = {}
+        for role, p in input_paths.items():
+            described_inputs[f"{role}.sha256"] = self.input_hashes[role]
+            described_inputs[f"{role}.file"] = p.name
+        attached = {name: Path(p).read_bytes() for name, p in sorted((attachments or {}).items())}
+
+        layout = deterministic_blueprint(blueprint or default_blueprint(), self.recording_id)
+        self._mcap_file = open(self.mcap_path, "wb")  # an unusable directory raises an OSError here
+        try:
+            self.rerun = capture_stream(APPLICATION_ID, self.recording_id, self._rrd_part, layout)
+        except BaseException:
+            self._mcap_file.close()
+            self.mcap_path.unlink()
+            raise
+        self._mcap = McapLog(self._mcap_file)
+        self._mcap.metadata(METADATA_STAGE, {"stage": stage, "recording_id": self.recording_id})
+        self._mcap.metadata(METADATA_PARAMETERS,
+                            {k: json_bytes(v).decode() for k, v in self.parameters.items()})
+        self._mcap.metadata(METADATA_INPUTS, described_inputs)
+        for name, data in attached.items():
+            self.attach(name, data)
+
+    # -- lifetime --------------------------------------------------------------------------
+    def __enter__(self) -> "StageRecorder":
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Finish the MCAP file and write the reproducible ``.rrd`` (idempotent)."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self._mcap.finish()
+        finally:
+            self._mcap_file.close()
+            self.rerun.flush()
+            self.rerun.disconnect()
+        try:
+            write_canonical_rrd(self._rrd_part, self.rrd_path, APPLICATION_ID, self.recording_id)
+        finally:
+            self._rrd_part.unlink(missing_ok=True)
+
+    # -- helpers ---------------------------------------------------------------------------
+    def _at(self, t: float) -> int:
+        """Data time ``t`` (s) -> ns; also the Rerun stream's current time."""
+        ns = seconds_to_ns(t)
+        self.rerun.set_time(TIMELINE, duration=np.timedelta64(ns, "ns"))
+        return ns
+
+    def _write(self, topic: str, ns: int, message) -> None:
+        self._mcap.write(self._mcap.protobuf_channel(topic, type(message)), ns, message.encode())
+
+    def _place(self, entity: str, frame_id: str) -> None:
+        """Put a Rerun entity into the named frame ``frame_id`` (world: the root, nothing to do)."""
+        if frame_id != WORLD_FRAME:
+            self.rerun.log(entity, rr.CoordinateFrame(frame_id), static=True)
+
+    # -- public logging API ----------------------------------------------------------------
+    def scalars(self, topic: str, t: np.ndarray, values: np.ndarray,
+                names: Sequence[str] | None = None) -> None:
+        """A time series: ``values`` (n, k) or (n,) at times ``t`` (n,) in seconds.
+
+        MCAP: JSON channel, schema ``wipelab.Scalars``, one message ``{name: value, ...}``
+        per time stamp (non-finite values as null). Rerun: ``Scalars`` via ``send_columns``,
+        series named by a static ``SeriesLines``. ``names`` default to ``value`` for one
+        column, ``value_0``, ``value_1``, ... otherwise.
+        """
+        entity = _checked_topic(topic)
+        ns = seconds_array_to_ns(t)
+        values = np.asarray(values, dtype=float)
+        if values.ndim == 1:
+            values = values[:, None]
+        if values.ndim != 2 or values.shape[0] != ns.size:
+            raise ValueError(f"{topic}: values must have shape ({ns.size}, k) or ({ns.size},), "
+                             f"got {values.shape}")
+        k = values.shape[1]
+        names = ["value"] if names is None and k == 1 else \
+            [f"value_{i}" for i in range(k)] if names is None else [str(n) for n in names]
+        if len(names) != k or len(set(names)) != k:
+            raise ValueError(f"{topic}: need {k} distinct names, got {names}")
+        schema = {"title": _SCALARS_SCHEMA, "type": "object",
+                  "properties": {n: {"type": ["number", "null"]} for n in names},
+                  "required": sorted(names)}
+        channel = self._mcap.json_channel(topic, _SCALARS_SCHEMA, schema)
+        # Canonical JSON (sorted keys, no spaces) by string formatting: %r of a finite float
+        # is exactly what json.dumps writes, and this is several times faster per row.
+        order = sorted(range(k), key=lambda i: names[i])
+        keys = [json.dumps(names[i], ensure_ascii=False) for i in order]
+        template = "{" + ",".join(f"{key}:%r" for key in keys) + "}"
+        columns = values[:, order]
+        finite_rows = np.isfinite(columns).all(axis=1).tolist()
+        write = self._mcap.write
+        for time_ns, row, finite in zip(ns.tolist(), columns.tolist(), finite_rows):
+            text = template % tuple(row) if finite else \
+                "{" + ",".join(f"{key}:{v!r}" if math.isfinite(v) else f"{key}:null"
+                               for key, v in zip(keys, row)) + "}"
+            write(channel, time_ns, text.encode())
+        self.rerun.log(entity, rr.SeriesLines(names=names), static=True)
+        self.rerun.send_columns(entity, indexes=[rr.TimeColumn(TIMELINE, duration=ns.astype("timedelta64[ns]"))],
+                                columns=rr.Scalars.columns(scalars=values))
+
+    def points3d(self, topic: str, t: float, points: np.ndarray, colors=None, radii=None,
+                 frame_id: str = WORLD_FRAME) -> None:
+        """Points (n, 3) in metres in ``frame_id`` at time ``t``.
+
+        MCAP: ``foxglove.PointCloud`` (x, y, z float32 + rgba). Rerun: ``Points3D``.
+        ``colors``: (3,)/(4,) or (n, 3)/(n, 4), uint8 0..255 or float 0..1 (white if None);
+        ``radii``: metres, scalar or (n,) (Rerun only: Foxglove sizes points in the panel).
+        """
+        entity = _checked_topic(topic)
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        rgba = fx.rgba_uint8((255, 255, 255) if colors is None else colors, points.shape[0])
+        ns = self._at(t)
+        self._write(topic, ns, fx.point_cloud(ns, frame_id, points, rgba))
+        self._place(entity, frame_id)
+        self.rerun.log(entity, rr.Points3D(points, colors=None if colors is None else rgba, radii=radii))
+
+    def line_strip3d(self, topic: str, t: float, points: np.ndarray, color=(255, 255, 255),
+                     thickness: float = 0.002, frame_id: str = WORLD_FRAME) -> None:
+        """A polyline through ``points`` (n, 3), metres, at time ``t``; ``thickness`` in metres.
+
+        MCAP: ``foxglove.SceneUpdate`` with one entity (id = topic) holding a LINE_STRIP.
+        Rerun: ``LineStrips3D``.
+        """
+        entity = _checked_topic(topic)
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        rgba = fx.rgba_uint8(color, 1)
+        ns = self._at(t)
+        self._write(topic, ns, fx.scene_line_strip(ns, frame_id, topic, points, rgba[0], thickness))
+        self._place(entity, frame_id)
+        self.rerun.log(entity, rr.LineStrips3D([points], colors=rgba, radii=thickness / 2.0))
+
+    def arrow3d(self, topic: str, t: float, origin: np.ndarray, vector: np.ndarray,
+                color=(255, 64, 64), frame_id: str = WORLD_FRAME) -> None:
+        """Arrow(s) from ``origin`` along ``vector``, each (3,) or (n, 3), metres.
+
+        MCAP: ``foxglove.SceneUpdate`` with one entity (id = topic) of ArrowPrimitives whose
+        total length is |vector|. Rerun: ``Arrows3D``.
+        """
+        entity = _checked_topic(topic)
+        origins = np.asarray(origin, dtype=float).reshape(-1, 3)
+        vectors = np.asarray(vector, dtype=float).reshape(-1, 3)
+        if origins.shape != vectors.shape:
+            raise ValueError(f"{topic}: origin {origins.shape} and vector {vectors.shape} differ in shape")
+        rgba = fx.rgba_uint8(color, origins.shape[0])
+        ns = self._at(t)
+        self._write(topic, ns, fx.scene_arrows(ns, frame_id, topic, origins, vectors, rgba))
+        self._place(entity, frame_id)
+        self.rerun.log(entity, rr.Arrows3D(origins=origins, vectors=vectors, colors=rgba))
+
+    def transforms(self, t: float, transforms: Sequence[tuple]) -> None:
+        """Frame transforms ``[(parent, child, translation (3,), q_xyzw (4,)), ...]`` at ``t``.
+
+        Each places ``child`` in ``parent``: p_parent = R(q) p_child + translation (metres;
+        quaternion (x, y, z, w), normalised here). MCAP: one ``foxglove.FrameTransforms`` on
+        ``/tf``. Rerun: ``Transform3D`` with ``parent_frame``/``child_frame`` on ``/tf/<child>``.
+        """
+        ns = self._at(t)
+        self._write(TF_TOPIC, ns, fx.frame_transforms(ns, transforms))
+        for parent, child, translation, q_xyzw in transforms:
+            self.rerun.log(_checked_topic(f"{TF_TOPIC}/{child}"), rr.Transform3D(
+                translation=np.asarray(translation, dtype=float).reshape(3),
+                quaternion=fx.unit_quaternion(q_xyzw),
+                parent_frame=rerun_frame(parent), child_frame=child))
+
+    def pose(self, topic: str, t: float, frame_id: str, translation: np.ndarray,
+             q_xyzw: np.ndarray) -> None:
+        """A pose: ``translation`` (3,) m and quaternion (x, y, z, w) in ``frame_id``.
+
+        MCAP: ``foxglove.PoseInFrame``. Rerun: ``Transform3D`` of the entity's own frame
+        relative to ``frame_id``, drawn as axes (``TransformAxes3D``).
+        """
+        entity = _checked_topic(topic)
+        ns = self._at(t)
+        self._write(topic, ns, fx.pose_in_frame(ns, frame_id, translation, q_xyzw))
+        frames = {} if frame_id == WORLD_FRAME else \
+            {"parent_frame": frame_id, "child_frame": f"tf#{entity}"}
+        self.rerun.log(entity, rr.Transform3D(translation=np.asarray(translation, dtype=float).reshape(3),
+                                              quaternion=fx.unit_quaternion(q_xyzw), **frames),
+                       rr.TransformAxes3D(POSE_AXIS_LENGTH))
+
+    def camera_calibration(self, topic: str, t: float, K: np.ndarray, D: np.ndarray, width: int,
+                           height: int, frame_id: str, R: np.ndarray | None = None,
+                           P: np.ndarray | None = None) -> None:
+        """Calibration of a pinhole camera whose optical frame is ``frame_id``.
+
+        K (3, 3) pixels, D (5,) OpenCV (k1, k2, p1, p2, k3), optional R (3, 3) and P (3, 4).
+        MCAP: ``foxglove.CameraCalibration`` (``plumb_bob``). Rerun: ``Pinhole`` from
+        ``frame_id`` to ``<frame_id>_image_plane`` (RDF camera axes), the frame in which
+        images with the same ``frame_id`` are shown (as ``rerun mcap convert`` does).
+        """
+        entity = _checked_topic(topic)
+        ns = self._at(t)
+        self._write(topic, ns, fx.camera_calibration(ns, K, D, width, height, frame_id, R, P))
+        self.rerun.log(entity, rr.Pinhole(
+            image_from_camera=np.asarray(K, dtype=float).reshape(3, 3), resolution=[int(width), int(height)],
+            camera_xyz=rr.ViewCoordinates.RDF, parent_frame=rerun_frame(frame_id),
+            child_frame=frame_id + IMAGE_PLANE_SUFFIX))
+
+    def compressed_image(self, topic: str, t: float, data: bytes, frame_id: str) -> None:
+        """One encoded image (JPEG, PNG or WebP bytes) from the camera with optical frame ``frame_id``.
+
+        MCAP: ``foxglove.CompressedImage``. Rerun: ``EncodedImage`` in ``<frame_id>_image_plane``.
+        """
+        entity = _checked_topic(topic)
+        data = bytes(data)
+        image_format = fx.image_format(data)
+        ns = self._at(t)
+        self._write(topic, ns, fx.compressed_image(ns, data, frame_id, image_format))
+        self.rerun.log(entity, rr.CoordinateFrame(frame_id + IMAGE_PLANE_SUFFIX), static=True)
+        self.rerun.log(entity, rr.EncodedImage(contents=data, media_type=f"image/{image_format}"))
+
+    def video(self, topic: str, mp4_path: str | os.PathLike, frame_times: np.ndarray,
+              frame_id: str | None = None) -> None:
+        """A video file (H.264, H.265 or AV1, no B-frames) whose frame i shows data time ``frame_times[i]``.
+
+        Rerun: the file as a static ``AssetVideo`` plus one ``VideoFrameReference`` per frame
+        on the timeline (the .rrd grows by the file's size). MCAP: one
+        ``foxglove.CompressedVideo`` per frame (Annex B / OBU access units). ``frame_times``
+        (m,) may cover the first m <= n frames. ``frame_id``: camera optical frame; the images
+        are shown in ``<frame_id>_image_plane`` when given.
+
+        Raises
+        ------
+        wipelab.errors.InputError
+            If the file's codec is not H.264/H.265/AV1 or it has B-frames.
+        ValueError
+            If ``frame_times`` has more entries than the video has frames.
+        """
+        entity = _checked_topic(topic)
+        frame_ns = seconds_array_to_ns(frame_times)
+        foxglove_format, units = access_units(mp4_path)
+        asset = rr.AssetVideo(path=mp4_path)
+        video_ns = asset.read_frame_timestamps_nanos()
+        if frame_ns.size > video_ns.size:
+            raise ValueError(f"{mp4_path}: has {video_ns.size} frames, got {frame_ns.size} frame times")
+        for ns, unit in zip(frame_ns.tolist(), units):
+            self._write(topic, ns, fx.compressed_video(ns, unit, frame_id or "", foxglove_format))
+        if frame_id is not None:
+            self.rerun.log(entity, rr.CoordinateFrame(frame_id + IMAGE_PLANE_SUFFIX), static=True)
+        self.rerun.log(entity, asset, static=True)
+        self.rerun.send_columns(
+            entity, indexes=[rr.TimeColumn(TIMELINE, duration=frame_ns.astype("timedelta64[ns]"))],
+            columns=rr.VideoFrameReference.columns_nanos(video_ns[:frame_ns.size]))
+
+    def json(self, topic: str, t: float, message: dict, schema_name: str,
+             schema: dict | None = None) -> None:
+        """Any JSON-serialisable ``message`` on a named JSON-schema channel.
+
+        MCAP: schema ``schema_name`` (encoding jsonschema, ``{"type": "object"}`` if None),
+        message encoding json, canonical JSON (sorted keys; numpy arrays as lists; NaN as
+        null). Rerun: a ``TextDocument`` (Markdown with the pretty-printed JSON).
+        """
+        entity = _checked_topic(topic)
+        ns = self._at(t)
+        channel = self._mcap.json_channel(topic, schema_name, schema or {"type": "object"})
+        data = json_bytes(message)
+        self._mcap.write(channel, ns, data)
+        pretty = json.dumps(json.loads(data), indent=2, sort_keys=True, ensure_ascii=False)
+        self.rerun.log(entity, rr.TextDocument(f"`{schema_name}`\n\n```json\n{pretty}\n```",
+                                               media_type=rr.MediaType.MARKDOWN))
+
+    def attach(self, name: str, data: bytes, media_type: str = "application/octet-stream") -> None:
+        """Attach bytes to the MCAP (calibration files, configs); MCAP only."""
+        self._mcap.attachment(name, bytes(data), media_type)
