@@ -1,0 +1,45 @@
+"""Online force-profile learning (eqs. 13-15) and its convergence criterion."""
+
+import math
+
+import numpy as np
+import pytest
+
+from wipelab.control import (COMPARISON_PHASES, ConvergenceMonitor, ForceProfileLearner,
+                             ProfileLearningParams)
+from wipelab.learning.kernels import default_width
+
+
+def height(phase):
+    return 0.85 + 0.02 * np.sin(phase) + 0.006 * np.cos(2 * phase)
+
+
+def test_learns_a_periodic_height_profile_in_a_few_periods():
+    dt, omega = 1 / 120, 2 * math.pi * 0.25
+    learner = ForceProfileLearner(25, default_width(25), 12.0, 3.0, goal=0.9, amplitude=1.0,
+                                  dt=dt)
+    monitor = ConvergenceMonitor(ProfileLearningParams(tolerance=0.001))
+    phase, period_end = 0.0, 2 * math.pi
+    while monitor.periods_ < 6 and not monitor.converged:
+        phase += omega * dt
+        learner.update(height(phase), phase, omega)
+        if phase >= period_end:
+            period_end += 2 * math.pi
+            monitor.end_of_period(learner.waveform(COMPARISON_PHASES))
+    assert monitor.converged and monitor.periods_ <= 3
+    error = learner.waveform(COMPARISON_PHASES) - height(COMPARISON_PHASES)
+    # the locally constant fit of eqs. 13-15 smooths the profile by about a kernel width
+    assert np.max(np.abs(error)) < 0.002
+    assert np.sqrt(np.mean(error ** 2)) < 0.0012
+
+
+def test_convergence_needs_min_periods_and_small_changes():
+    monitor = ConvergenceMonitor(ProfileLearningParams(tolerance=0.002, min_periods=2,
+                                                       stable_periods=1))
+    wave = np.zeros(8)
+    assert math.isinf(monitor.end_of_period(wave))
+    assert not monitor.converged
+    assert monitor.end_of_period(wave + 0.005) == pytest.approx(0.005)
+    assert not monitor.converged
+    monitor.end_of_period(wave + 0.006)
+    assert monitor.converged

@@ -1,0 +1,68 @@
+"""Derivative estimates, running normalisation, period statistics, uniform resampling."""
+
+import numpy as np
+import pytest
+
+from wipelab.learning.derivatives import CentredDerivatives, savgol_centre_coefficients, window_for
+from wipelab.learning.normalise import PeriodStatistics, RunningNormaliser
+from wipelab.learning.sampling import to_uniform
+
+
+@pytest.mark.parametrize("window", [5, 7, 21, 101])
+def test_centred_fit_is_exact_for_quartics(window):
+    j = np.arange(window) - (window - 1) / 2
+    y = 0.3 - 0.2 * j + 0.05 * j ** 2 + 0.01 * j ** 3 - 0.002 * j ** 4
+    value, first, second = savgol_centre_coefficients(window, 4) @ y
+    assert (value, first, second) == pytest.approx((0.3, -0.2, 0.1), abs=1e-9)
+
+
+def test_window_follows_the_period_and_stays_odd_and_bounded():
+    assert window_for(2 * np.pi, 0.002, 0.125, 101) == 63          # 1 Hz at 500 Hz: 62.5 samples
+    assert window_for(2 * np.pi * 3, 1 / 30, 0.125, 101) == 5       # never below 5
+    assert window_for(2 * np.pi * 0.1, 0.002, 0.125, 101) == 101    # capped
+
+
+def test_centred_derivatives_pair_estimates_with_the_centre_sample():
+    dt, omega = 0.01, 2 * np.pi
+    derivatives = CentredDerivatives(1, dt, 0.125, 4, 101)
+    for k in range(40):
+        t = k * dt
+        derivatives.push(np.array([np.sin(omega * t)]), phase=omega * t, omega=omega)
+    y, yd, ydd, phase, _ = derivatives.centre(omega)
+    t_c = phase / omega
+    assert y[0] == pytest.approx(np.sin(omega * t_c), abs=1e-5)
+    assert yd[0] == pytest.approx(omega * np.cos(omega * t_c), rel=1e-4)
+    assert ydd[0] == pytest.approx(-omega ** 2 * np.sin(omega * t_c), rel=1e-3)
+    assert t_c == pytest.approx(39 * dt - 6 * dt)                   # window 13 -> 6 samples late
+
+
+def test_normaliser_waits_for_one_swing_then_maps_the_range_to_unit():
+    t = np.arange(0, 3, 0.01)
+    y = 0.6 + 0.1 * np.cos(2 * np.pi * t)
+    normaliser = RunningNormaliser(1, 0.01, time_constant_s=10.0)
+    u = np.array([normaliser.update(np.array([v]))[0] for v in y])
+    assert not u[:50].any()                                          # before the first swing
+    np.testing.assert_allclose(u[150:], np.cos(2 * np.pi * t[150:]), atol=0.01)
+
+
+def test_period_statistics_are_exact_over_a_fractional_period():
+    dt, frequency = 0.01, 1 / 0.937                                  # 93.7 samples per period
+    statistics = PeriodStatistics(1, dt, capacity=400)
+    for k in range(300):
+        mean, amplitude = statistics.update(np.array([2.0 + 0.5 * np.sin(2 * np.pi * frequency * k * dt)]),
+                                            2 * np.pi * frequency)
+    assert mean[0] == pytest.approx(2.0, abs=2e-3) and amplitude[0] == pytest.approx(0.5, rel=1e-2)
+
+
+def test_to_uniform_bridges_invalid_rows_and_keeps_uniform_data():
+    t = np.arange(10) * 0.1
+    Y = np.column_stack([t, 2 * t])
+    same_t, same_Y = to_uniform(t, Y)
+    assert same_t is t and same_Y is Y
+    valid = np.ones(10, dtype=bool)
+    valid[4] = False
+    Y_bad = Y.copy()
+    Y_bad[4] = np.nan
+    t_u, Y_u = to_uniform(t, Y_bad, valid)
+    np.testing.assert_allclose(t_u, t)
+    np.testing.assert_allclose(Y_u, Y, atol=1e-12)

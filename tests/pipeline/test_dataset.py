@@ -1,0 +1,116 @@
+"""``wipelab dataset``: five synthetic demos, one of them broken, in parallel processes and on
+a Dask cluster: the broken one is reported, the others complete, the exit code says so."""
+
+import csv
+import json
+
+import pytest
+from click.testing import CliRunner
+
+from wipelab.cli.pipeline_commands import dataset, synth_dataset
+from wipelab.pipeline.cache import read_record
+from wipelab.pipeline.dataset import DemoResult, find_demos, format_summary
+
+#: Per demo: learn the movement from the demo's ground truth, then roll the model out.
+PIPELINE = """
+[pipeline]
+name = "truth"
+
+[inputs]
+demo = "unused"
+
+[stages.learn]
+input = "demo:truth.csv"
+
+[stages.rollout]
+input = "learn:model.json"
+periods = 1
+"""
+
+BROKEN = "line_1.25hz_seed0"
+
+
+@pytest.fixture(scope="module")
+def data_set(tmp_path_factory):
+    """Five rendered demos (circle at 0.8 and 1.25 Hz, line at 0.8 and 1.25 Hz, figure8 at
+    1.25 Hz); the ground truth of one is cut off mid-row."""
+    root = tmp_path_factory.mktemp("dataset")
+    data = root / "demos"
+    runner = CliRunner()
+    for pattern, frequencies in [("circle", ("0.8", "1.25")), ("line", ("0.8", "1.25")),
+                                 ("figure8", ("1.25",))]:
+        args = [str(data), "--pattern", pattern, "--duration", "12", "--fps", "10", "-j", "2",
+                "-q"]
+        for frequency in frequencies:
+            args += ["--frequency", frequency]
+        assert runner.invoke(synth_dataset, args).exit_code == 0
+    truth = data / BROKEN / "truth.csv"
+    truth.write_text(truth.read_text()[:200])
+    (root / "truth.toml").write_text(PIPELINE)
+    return root
+
+
+def check_summary(out_dir, result):
+    assert result.exit_code == 1, result.output
+    with open(out_dir / "summary.csv") as f:
+        rows = {row["demo"]: row for row in csv.DictReader(f)}
+    assert sorted(rows) == ["circle_0.8hz_seed0", "circle_1.25hz_seed0", "figure8_1.25hz_seed0",
+                            "line_0.8hz_seed0", BROKEN]
+    broken = rows.pop(BROKEN)
+    assert broken["status"] == "failed"
+    assert f"{BROKEN}/truth.csv" in broken["error"] and broken["learn.frequency_hz"] == ""
+    for name, row in rows.items():
+        assert row["status"] == "ok" and row["error"] == "" and row["stages_run"] == "2"
+        truth_hz = float(name.split("_")[1].removesuffix("hz"))
+        assert abs(float(row["learn.frequency_hz"]) - truth_hz) < 0.02 * truth_hz, (name, row)
+        run_dir = out_dir / "runs" / name
+        assert read_record(run_dir / "rollout") is not None
+        model = json.loads((run_dir / "learn" / "model.json").read_text())
+        assert model["frequency_hz"] == pytest.approx(float(row["learn.frequency_hz"]), rel=1e-5)
+    printed = result.stdout.splitlines()
+    assert printed[0].split()[:5] == ["demo", "status", "seconds", "stages_run", "stages_reused"]
+    assert sum(" failed " in line for line in printed) == 1
+
+
+@pytest.mark.slow
+def test_parallel_processes(data_set):
+    out = data_set / "out-j2"
+    result = CliRunner().invoke(dataset, [str(data_set / "demos"), "--pipeline",
+                                          str(data_set / "truth.toml"), "-j", "2", "-o", str(out)])
+    check_summary(out, result)
+    assert f"failed {BROKEN}: " in result.stderr
+    assert "4 of 5 demos ok" in result.stderr
+
+
+@pytest.mark.slow
+def test_dask_cluster_on_loopback(data_set):
+    from distributed import LocalCluster
+
+    out = data_set / "out-dask"
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster:
+        result = CliRunner().invoke(dataset, [str(data_set / "demos"), "--pipeline",
+                                              str(data_set / "truth.toml"), "-o", str(out),
+                                              "--scheduler", cluster.scheduler_address, "-q"])
+    check_summary(out, result)
+
+
+def test_demo_directories_are_found_by_any_of_their_files(tmp_path):
+    for name, files in [("a", ["left.mp4", "right.mp4", "calibration.yaml"]),
+                        ("b/c", ["calibration.yaml"]), ("d", ["notes.txt"])]:
+        (tmp_path / name).mkdir(parents=True)
+        for file in files:
+            (tmp_path / name / file).write_text("")
+    assert [p.relative_to(tmp_path).as_posix() for p in find_demos(tmp_path)] == ["a", "b/c"]
+
+
+def test_summary_table_has_a_column_per_metric_and_blank_cells_where_missing():
+    results = [DemoResult("a", ok=True, seconds=1.25, stages_run=2,
+                          metrics={"learn.frequency_hz": 1.0}),
+               DemoResult("b", ok=False, error="b/left.mp4: cannot be decoded", seconds=0.5)]
+    lines = format_summary(results).splitlines()
+    assert lines[0].split() == ["demo", "status", "seconds", "stages_run", "stages_reused",
+                                "learn.frequency_hz", "error"]
+    assert lines[1].split() == ["a", "ok", "1.2", "2", "0", "1"]
+    assert lines[2].split()[:5] == ["b", "failed", "0.5", "0", "0"]
+    assert lines[2].endswith("b/left.mp4: cannot be decoded")

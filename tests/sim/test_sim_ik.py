@@ -1,0 +1,76 @@
+"""Inverse kinematics: reaches targets, respects joint limits, moves smoothly."""
+
+import numpy as np
+import pytest
+
+from wipelab.sim.arm import RightArm
+from wipelab.sim.armar3 import RIGHT_ARM_JOINTS, TORSO_JOINTS, armar3b_urdf_path
+from wipelab.sim.kinematics import KinematicChain
+from wipelab.sim.world import BasePose
+
+CENTRE = np.array([0.58, -0.28, 0.91])
+
+
+@pytest.fixture(scope="module")
+def arm():
+    return RightArm(BasePose().joint_values())
+
+
+@pytest.fixture(scope="module")
+def posture(arm):
+    phases = np.linspace(0, 2 * np.pi, 8, endpoint=False)
+    points = np.concatenate([np.column_stack([CENTRE[0] + 0.1 * np.cos(phases),
+                                              CENTRE[1] + 0.1 * np.sin(phases),
+                                              np.full(8, CENTRE[2] + dz)])
+                             for dz in (-0.04, 0.04)])
+    return arm.posture_for(CENTRE, points)
+
+
+def test_jacobian_matches_finite_differences():
+    chain = KinematicChain(armar3b_urdf_path().read_text(), "tcp_r",
+                           TORSO_JOINTS + RIGHT_ARM_JOINTS)
+    q = np.random.default_rng(2).uniform(chain.lower, chain.upper)
+    pose, jac = chain.jacobian(q)
+    numeric = np.empty((3, q.size))
+    for i in range(q.size):
+        dq = np.zeros(q.size)
+        dq[i] = 1e-7
+        numeric[:, i] = (chain.forward(q + dq)[:3, 3] - pose[:3, 3]) / 1e-7
+    assert np.abs(numeric - jac[:3]).max() < 1e-5
+
+
+def test_posture_leans_the_torso_only_as_needed_and_keeps_margin(posture):
+    assert posture.error < 2e-3
+    assert posture.margin >= np.radians(5.0)
+    assert -np.radians(40.0) <= posture.torso[0] <= 0.0
+
+
+def test_ik_reaches_targets_within_joint_limits(arm, posture):
+    tracker = arm.tracker(posture)
+    rng = np.random.default_rng(4)
+    targets = CENTRE + rng.uniform([-0.1, -0.1, -0.04], [0.1, 0.1, 0.04], size=(12, 3))
+    for target in targets:
+        q, error = tracker.solve(posture.arm, target, max_iterations=300)
+        assert error < 1e-3
+        limits = tracker.chain
+        assert np.all(q >= limits.lower) and np.all(q <= limits.upper)
+        assert np.linalg.norm(tracker.chain.forward(q)[:3, 3] - target) < 1e-3
+
+
+def test_tracking_steps_are_rate_limited_and_follow_a_circle(arm, posture):
+    tracker = arm.tracker(posture)
+    q = posture.arm.copy()
+    errors = []
+    for phase in np.linspace(0, 4 * np.pi, 960):      # 0.25 Hz at 120 Hz, two periods
+        target = CENTRE + [0.1 * np.cos(phase), 0.1 * np.sin(phase), 0.0]
+        new = tracker.step(q, target)
+        assert np.max(np.abs(new - q)) <= tracker.params.max_step + 1e-12
+        q = new
+        errors.append(np.linalg.norm(tracker.chain.forward(q)[:3, 3] - target))
+    assert max(errors[480:]) < 1e-3
+
+
+def test_an_unreachable_target_is_reported_not_faked(arm, posture):
+    tracker = arm.tracker(posture)
+    _, error = tracker.solve(posture.arm, CENTRE + [0.6, 0.0, 0.0], max_iterations=300)
+    assert error > 0.1

@@ -1,0 +1,67 @@
+"""The control loop on the simulated robot: compliance finds the surface, the safety stop."""
+
+import numpy as np
+import pytest
+
+from wipelab.control import ComplianceParams
+from wipelab.sim.path import place_model
+from wipelab.sim.session import SafetyStop
+from wipelab.sim.surfaces import flat_surface
+from wipelab.sim.task import CALIBRATION_LIFT, TaskOptions, build_task
+
+from sim_models import circle_model
+
+
+def _task(compliance: ComplianceParams):
+    surface = flat_surface()
+    model = place_model(circle_model(), surface.wipe_center)
+    task = build_task(model, surface, TaskOptions(compliance=compliance))
+    start = np.array([*surface.wipe_center, task.start_height])
+    task.session.move_to(start + [0.0, 0.0, CALIBRATION_LIFT], 0.5)
+    task.session.calibrate()
+    task.session.move_to(start, 0.5)
+    return task, start
+
+
+def test_compliance_moves_down_until_it_presses_with_f0():
+    task, start = _task(ComplianceParams(target_force=8.0, feedback="fz"))
+    try:
+        first = len(task.session.trace)
+        for _ in range(240):
+            task.session.tick(start[:2], start[2], compliance_on=True)
+        trace = {k: v[first:] for k, v in task.session.trace.arrays().items()}
+        last = slice(-60, None)
+        assert np.abs(trace["vz"]).max() <= 0.12 + 1e-12
+        assert trace["vz"][trace["sponge_force"] < 0.5].max() < 0       # free: moving down
+        assert trace["force"][last, 2].mean() == pytest.approx(8.0, abs=1.0)
+        assert trace["sponge_force"][last].min() > 5.0
+        assert trace["tcp_cmd"][-1, 2] < start[2] - 0.02
+    finally:
+        task.close()
+
+
+def test_calibration_touching_the_surface_is_refused():
+    surface = flat_surface()
+    task = build_task(place_model(circle_model(), surface.wipe_center), surface, TaskOptions())
+    try:
+        task.session.move_to([*surface.wipe_center, task.start_height - 0.02], 0.5)
+        with pytest.raises(RuntimeError, match="F/T calibration failed"):
+            task.session.calibrate()
+    finally:
+        task.close()
+
+
+def test_safety_stop_retracts_when_the_force_exceeds_the_limit():
+    task, start = _task(ComplianceParams(target_force=8.0, safety_force=25.0))
+    try:
+        with pytest.raises(SafetyStop, match="exceeded the safety limit of 25 N"):
+            for k in range(480):   # push 8 cm down without compliance
+                task.session.tick(start[:2], start[2] - 0.08 * k / 480, compliance_on=False)
+        trace = task.session.trace.arrays()
+        stop = int(np.argmax(np.linalg.norm(trace["force"], axis=1) > 25.0))
+        assert stop > 0
+        assert trace["tcp_cmd"][-1, 2] > trace["tcp_cmd"][stop, 2] + 0.05   # retracted
+        assert trace["sponge_force"][-1] < 1.0                               # free again
+        assert trace["sponge_force"].max() < 60.0
+    finally:
+        task.close()

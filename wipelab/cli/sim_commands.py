@@ -1,0 +1,144 @@
+"""``wipelab adapt`` and ``wipelab replay``: the simulated ARMAR-IIIb (wiring only).
+
+The work is in :mod:`wipelab.stages.adapt` and :mod:`wipelab.stages.replay`; PyBullet is
+imported when a command runs.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from wipelab.errors import InputError
+
+_PATH = click.Path(path_type=Path)
+
+
+def _pair(option: str, text: str | None, count: int):
+    """'a,b[,c]' -> tuple of floats; InputError naming the option otherwise."""
+    if text is None:
+        return None
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != count:
+        raise InputError(f"{option}: expected {count} comma-separated numbers, got {text!r}")
+    return values
+
+
+def _common(function):
+    options = [
+        click.option("-o", "--output", "out_dir", type=_PATH, required=True,
+                     help="Output directory."),
+        click.option("--surface", default=None, metavar="NAME|FILE.toml",
+                     help="flat, bowl, sink or a surface TOML file."),
+        click.option("--force", type=float, default=None,
+                     help="Contact force F0 (N) [adapt default: 10]."),
+        click.option("--feedback", type=click.Choice(["fz", "norm"]), default=None,
+                     help="Force feedback: F_z or |F| (lets the hand climb edges) "
+                          "[adapt default: norm]."),
+        click.option("--base", default="0,0,0", show_default=True, metavar="X,Y,YAW",
+                     help="Robot platform pose in the world (m, m, rad)."),
+        click.option("--sponge-stiffness", type=float, default=1000.0, show_default=True,
+                     help="Sponge stiffness (N/m, 500-2000)."),
+        click.option("--seed", type=int, default=0, show_default=True,
+                     help="Seed of the F/T sensor noise and bias."),
+        click.option("-q", "--quiet", is_flag=True, help="No progress bar."),
+    ]
+    for option in reversed(options):
+        function = option(function)
+    return function
+
+
+@click.command("adapt")
+@click.argument("model", type=_PATH)
+@_common
+@click.option("--periods", type=int, default=8, show_default=True,
+              help="Most learning periods (learning stops earlier when converged).")
+@click.option("--center", default=None, metavar="X,Y",
+              help="Where the centre of the path's bounding box goes (m, world) "
+                   "[default: the surface's wiping centre, 0.58,-0.28 for the built-ins].")
+@click.option("--amplitude-scale", type=float, default=1.0, show_default=True,
+              help="Scale of the x-y oscillation.")
+@click.option("--slowdown", type=float, default=4.0, show_default=True,
+              help="Omega is divided by this while learning.")
+@click.option("--hold-periods", type=int, default=1, show_default=True,
+              help="Periods with the learned profile after learning.")
+@click.option("--tolerance", type=float, default=0.002, show_default=True,
+              help="Convergence: largest change of the learned profile over a period (m).")
+def adapt(model: Path, out_dir: Path, surface: str | None, force: float | None,
+          feedback: str | None, base: str, sponge_stiffness: float, seed: int, quiet: bool,
+          periods: int, center: str | None, amplitude_scale: float, slowdown: float,
+          hold_periods: int, tolerance: float) -> None:
+    """Learn the force profile of a surface for MODEL (model.json) on the simulated robot.
+
+    The x-y path is centred at --center, slowed down, and executed with active compliance in
+    z; the z that keeps F0 is learned online. Writes OUT/adapted_model.json, metrics.json,
+    adapt.mcap, adapt.rrd and manifest.json.
+    """
+    from wipelab.control.force_profile import ProfileLearningParams
+    from wipelab.stages.adapt import AdaptParams, run_adapt
+
+    params = AdaptParams(
+        surface=surface or "flat", center=_pair("--center", center, 2),
+        amplitude_scale=amplitude_scale, slowdown=slowdown, periods=periods,
+        hold_periods=hold_periods, force=10.0 if force is None else force,
+        feedback=feedback or "norm", base=_pair("--base", base, 3),
+        sponge_stiffness=sponge_stiffness, seed=seed,
+        learning=ProfileLearningParams(tolerance=tolerance))
+    metrics = run_adapt(model, out_dir, params, quiet=quiet)
+    learning, profile = metrics["learning"], metrics["profile_last_learning_period"]
+    state = "converged" if learning["converged"] else "not converged"
+    click.echo(f"adapt: {state} after {learning['periods']} periods; learned height RMS "
+               f"error {1000 * profile['rms_height_error_m']:.1f} mm -> {out_dir}")
+    if metrics["safety_stop"]:
+        click.echo(f"warning: safety stop: {metrics['safety_stop']}", err=True)
+
+
+@click.command("replay")
+@click.argument("model", type=_PATH)
+@click.argument("more_scales", nargs=-1, type=float, metavar="")
+@_common
+@click.option("--frequency-scale", "scales", type=float, multiple=True,
+              help="Frequency scale(s) relative to the learning frequency: "
+                   "--frequency-scale 1 2 3 [default: 1 2 3].")
+@click.option("--mode", "modes", multiple=True,
+              type=click.Choice(["learned", "learned+compliance", "compliance", "planar"]),
+              help="Run only these modes (repeatable) [default: all four].")
+@click.option("--periods", type=int, default=3, show_default=True,
+              help="Scored periods per scale and mode.")
+@click.option("--warmup-periods", type=int, default=1, show_default=True,
+              help="Unscored periods first.")
+@click.option("--center", default=None, metavar="X,Y",
+              help="Placement of a model without z (as in adapt).")
+def replay(model: Path, more_scales: tuple[float, ...], out_dir: Path, surface: str | None,
+           force: float | None, feedback: str | None, base: str, sponge_stiffness: float,
+           seed: int, quiet: bool, scales: tuple[float, ...], modes: tuple[str, ...],
+           periods: int, warmup_periods: int, center: str | None) -> None:
+    """Execute MODEL (an adapted_model.json) at several speeds, with the learned profile
+    alone, with compliance on top, and the two baselines (compliance alone, planar path).
+
+    Usage: wipelab replay MODEL -o OUT --frequency-scale 1 2 3. Writes OUT/metrics.json (per
+    scale and mode), replay.mcap, replay.rrd and manifest.json.
+    """
+    from wipelab.stages.replay import MODES, ReplayParams, run_replay
+
+    if more_scales and not scales:
+        raise click.UsageError(f"unexpected extra arguments {list(more_scales)}")
+    all_scales = tuple(scales) + tuple(more_scales) or (1.0, 2.0, 3.0)
+    params = ReplayParams(surface=surface, frequency_scales=all_scales,
+                          modes=tuple(modes) or MODES, periods=periods,
+                          warmup_periods=warmup_periods, force=force, feedback=feedback,
+                          center=_pair("--center", center, 2), base=_pair("--base", base, 3),
+                          sponge_stiffness=sponge_stiffness, seed=seed)
+    metrics = run_replay(model, out_dir, params, quiet=quiet)
+    for scale, runs in metrics["scales"].items():
+        summary = ", ".join(f"{mode} {run.get('rms_force_error_n', float('nan')):.2f} N"
+                            for mode, run in runs.items())
+        click.echo(f"replay {scale}x: RMS(|F|-F0) {summary}")
+    click.echo(f"-> {out_dir}")
+
+
+COMMANDS = [adapt, replay]

@@ -1,0 +1,114 @@
+"""Canonical system (b): the adaptive Fourier series of Petric, Gams and Zlajpah (2011).
+
+One adaptive-frequency phase oscillator learns a truncated Fourier series of the input,
+y_hat = sum_{c=0}^{M} alpha_c cos(c phi) + beta_c sin(c phi), and is driven by its error
+(the form of eqs. 1-3, with eq. 4 replaced by the series):
+
+    phi' = Omega - K e sin(phi),   Omega' = -K_Omega e sin(phi),
+    alpha_c' = nu e cos(c phi),    beta_c' = nu e sin(c phi),   beta_1 = 0 (defines phi).
+
+Because the series holds the offset and every harmonic, the oscillator settles on the
+fundamental without the pool's logic step -- provided it approaches from above: a series at
+f/2 fits a signal of period 1/f just as well (with even terms only), so an oscillator started
+below the fundamental can lock onto a subharmonic. The default initial frequency is therefore
+the top of the expected range (3 Hz for wiping), and the gains scale with the frequency (see
+:mod:`wipelab.learning.oscillators`).
+
+``AFSParameters.petric()`` gives the published constant gains. Several DOFs share phi and
+Omega. Integrated with explicit Euler substeps; series terms at or above the Nyquist
+frequency of the samples are switched off.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from wipelab.learning.oscillators import (DOF_COUPLINGS, gain_scale, interpolated_inputs,
+                                          phase_drive)
+
+
+@dataclass(frozen=True)
+class AFSParameters:
+    """Parameters of the adaptive Fourier series (gains at 1 Hz when scaled)."""
+
+    n_terms: int = 10                  # M, harmonics of the series (plus the offset)
+    coupling: float = 3.0              # K (1/s)
+    frequency_coupling: float = 6.0    # K_Omega (1/s^2)
+    learning_rate: float = 2.0         # nu (1/s)
+    scale_with_frequency: bool = True  # gains x (Omega / 2 pi), K_Omega x (Omega / 2 pi)^2
+    initial_frequency_hz: float = 3.0  # Omega(0) / 2 pi (Hz): the top of the expected range
+    min_frequency_hz: float = 0.05     # Omega is kept in [min, max] (Hz)
+    max_frequency_hz: float = 10.0
+
+    @classmethod
+    def petric(cls) -> AFSParameters:
+        """The published defaults: M = 10, nu = 2, K = K_Omega = 20, Omega(0) = 2 pi, unscaled."""
+        return cls(n_terms=10, coupling=20.0, frequency_coupling=20.0, learning_rate=2.0,
+                   scale_with_frequency=False, initial_frequency_hz=1.0)
+
+
+class AdaptiveFourierSeries:
+    """The AFS canonical system for d DOFs (reference implementation, numpy).
+
+    Attributes
+    ----------
+    phase_ : float
+        phi (rad), unwrapped.
+    omega_ : float
+        Omega (rad/s).
+    alpha_, beta_ : ndarray, shape (d, M + 1)
+        Cosine and sine coefficients per DOF, index c = 0..M (normalised input units).
+    """
+
+    def __init__(self, n_dofs: int, params: AFSParameters = AFSParameters(), reference: int = 0,
+                 dof_coupling: str = "sum"):
+        if dof_coupling not in DOF_COUPLINGS:
+            raise ValueError(f"dof_coupling must be one of {DOF_COUPLINGS}, got {dof_coupling!r}")
+        self.params = params
+        self.reference = reference
+        self.sum_coupling = dof_coupling == "sum"
+        self.harmonics = np.arange(params.n_terms + 1)
+        self.phase_ = 0.0
+        self.omega_ = 2.0 * math.pi * params.initial_frequency_hz
+        self.alpha_ = np.zeros((n_dofs, params.n_terms + 1))
+        self.beta_ = np.zeros((n_dofs, params.n_terms + 1))
+        self.dt = math.inf
+
+    def _substep(self, u: np.ndarray, h: float) -> None:
+        p = self.params
+        m = gain_scale(self.omega_, p.scale_with_frequency)
+        angles = self.harmonics * self.phase_
+        # Terms at or above the Nyquist frequency of the samples cannot be observed: off.
+        observable = self.harmonics * self.omega_ * self.dt < math.pi
+        cos_c = np.where(observable, np.cos(angles), 0.0)
+        sin_c = np.where(observable, np.sin(angles), 0.0)
+        error = u - (self.alpha_ @ cos_c + self.beta_ @ sin_c)
+        drive = phase_drive(error, self.phase_, self.alpha_[:, 1], self.beta_[:, 1],
+                            self.reference, self.sum_coupling)
+        self.phase_ += h * (self.omega_ - p.coupling * m * drive)
+        omega = self.omega_ - h * p.frequency_coupling * m * m * drive
+        self.omega_ = min(max(omega, 2.0 * math.pi * p.min_frequency_hz),
+                          2.0 * math.pi * p.max_frequency_hz)
+        self.alpha_ += (h * p.learning_rate * m) * error[:, None] * cos_c
+        self.beta_ += (h * p.learning_rate * m) * error[:, None] * sin_c
+        self.beta_[self.reference, 1] = 0.0
+
+    def advance(self, previous: np.ndarray, current: np.ndarray, dt: float, n_sub: int) -> None:
+        """Integrate over one sample interval dt with the input (d,) linear from previous to current."""
+        self.dt = dt
+        h = dt / n_sub
+        for u in interpolated_inputs(previous, current, n_sub):
+            self._substep(u, h)
+
+    @property
+    def frequencies_hz(self) -> np.ndarray:
+        """The oscillator frequency as an array of one (Hz), for logging like the AFO pool."""
+        return np.array([self.omega_ / (2.0 * math.pi)])
+
+    @property
+    def fundamental(self) -> tuple[float, float]:
+        """(phase phi in rad, instantaneous Omega in rad/s)."""
+        return self.phase_, self.omega_

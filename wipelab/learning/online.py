@@ -1,0 +1,301 @@
+"""The two-layer online learner (Fig. 1): canonical system -> phase and Omega -> periodic DMP.
+
+Per sample, as a robot watching the demonstration would:
+
+1. normalise the input (running estimates) and advance the canonical system over the sample
+   interval (AFS, or the AFO pool with its logic step) -> phase phi;
+2. update, over the last periods: the fundamental Omega (the mean of the oscillator's
+   frequency, free of the ripple the coupling term puts on it), the anchor g and the
+   amplitude r (mean and sqrt(2) RMS of each DOF);
+3. estimate position, velocity and acceleration by a centred polynomial fit over the last
+   samples, and learn the weights at that centre sample's phase with the incremental LWR of
+   eqs. 13-15, from f_targ (text after eq. 12);
+4. integrate the DMP (eqs. 6-7) with the current weights: the imitated movement (Fig. 5).
+
+:class:`OnlineLearner` is the reference implementation, composed of the numpy classes of this
+package; :func:`learn_online` runs the same algorithm through a numba kernel
+(:mod:`wipelab.learning._online_kernel`) unless asked for the reference.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from wipelab.learning.afo import AdaptiveOscillatorPool, AFOParameters
+from wipelab.learning.afs import AdaptiveFourierSeries, AFSParameters
+from wipelab.learning.derivatives import CentredDerivatives
+from wipelab.learning.dmp import PeriodicDMP, forcing_target
+from wipelab.learning.kernels import default_width, kernel_activations
+from wipelab.learning.lwr import IncrementalLWR
+from wipelab.learning.model import PeriodicModel
+from wipelab.learning.normalise import PeriodStatistics, RunningNormaliser
+from wipelab.learning.oscillators import substep_count
+
+CANONICAL_SYSTEMS = ("afs", "afo")
+
+
+@dataclass(frozen=True)
+class OnlineParameters:
+    """Settings of the online learner (learned state lives in the learner)."""
+
+    canonical: str = "afs"                  # "afs" (adaptive Fourier series) or "afo" (pool, eqs. 1-5)
+    kernels: int = 25                       # N
+    width: float | None = None              # h of eq. 8; None -> 2.5 N
+    alpha_s: float = 12.0                   # eq. 6
+    beta_s: float = 3.0                     # eq. 6
+    forgetting: float = 0.99                # lambda of eq. 14
+    forgetting_samples_per_period: float | None = 100.0  # lambda counts per 1/this of a period
+    p0: float = 1.0                         # P_i(0) of eq. 14
+    dof_coupling: str = "sum"               # "sum": every DOF drives the shared phase; "reference": one
+    substep_hz: float = 500.0               # oscillators integrate at >= this rate (Hz)
+    normaliser_time_constant_s: float = 10.0  # tau of the running normaliser (s)
+    derivative_window_periods: float = 0.125  # polynomial window as a fraction of the period
+    derivative_degree: int = 4              # polynomial degree of the derivative fit
+    max_derivative_window: int = 101        # samples, odd
+    min_frequency_hz: float = 0.1           # longest period the anchor window covers (Hz)
+    statistics_periods: int = 1             # periods over which Omega, g and r are averaged
+    weights_every_s: float = 0.05           # interval of the weight snapshots in the history (s)
+    afs: AFSParameters = field(default_factory=AFSParameters)
+    afo: AFOParameters = field(default_factory=AFOParameters)
+
+    def __post_init__(self):
+        if self.canonical not in CANONICAL_SYSTEMS:
+            raise ValueError(f"canonical must be one of {CANONICAL_SYSTEMS}, got {self.canonical!r}")
+        if self.kernels < 2:
+            raise ValueError(f"kernels must be >= 2, got {self.kernels}")
+        if self.max_derivative_window < 5 or self.max_derivative_window % 2 == 0:
+            raise ValueError("max_derivative_window must be odd and >= 5")
+
+    @property
+    def kernel_width(self) -> float:
+        """h actually used."""
+        return default_width(self.kernels) if self.width is None else float(self.width)
+
+
+@dataclass(frozen=True)
+class LearnHistory:
+    """What a learning run went through, for logs and figures.
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+        Sample times (s).
+    input : ndarray, shape (n, d)
+        The demonstration (m).
+    output : ndarray, shape (n, d)
+        The learned movement at the same times (online: the DMP integrated while learning,
+        Fig. 5; offline: the model's rollout).
+    phase : ndarray, shape (n,)
+        Canonical phase (rad, unwrapped).
+    fundamental_hz : ndarray, shape (n,)
+        Selected fundamental Omega / 2 pi (Hz).
+    oscillators_hz : ndarray, shape (n, M)
+        Every oscillator's frequency (Hz): M = 3 for the AFO pool (Fig. 4), 1 for the AFS.
+    weights_t : ndarray, shape (k,)
+        Times of the weight snapshots (s).
+    weights : ndarray, shape (k, d, N)
+        The weights as they converge.
+    """
+
+    t: np.ndarray
+    input: np.ndarray
+    output: np.ndarray
+    phase: np.ndarray
+    fundamental_hz: np.ndarray
+    oscillators_hz: np.ndarray
+    weights_t: np.ndarray
+    weights: np.ndarray
+
+
+def _wrap(angle: float) -> float:
+    return float(np.mod(angle, 2.0 * math.pi))
+
+
+class OnlineLearner:
+    """Reference implementation of the online two-layer learner for d DOFs sampled every dt.
+
+    Parameters
+    ----------
+    n_dofs : int
+    dt : float
+        Sample interval (s); samples are assumed uniform.
+    params : OnlineParameters
+    reference_dof : int
+        The DOF whose fundamental defines phase 0 (a cosine peak).
+    """
+
+    def __init__(self, n_dofs: int, dt: float, params: OnlineParameters = OnlineParameters(),
+                 reference_dof: int = 0):
+        self.params = params
+        self.dt = dt
+        self.n_sub = substep_count(dt, params.substep_hz)
+        width = params.kernel_width
+        if params.canonical == "afs":
+            self.canonical = AdaptiveFourierSeries(n_dofs, params.afs, reference_dof, params.dof_coupling)
+            offset = 0.0
+        else:
+            self.canonical = AdaptiveOscillatorPool(n_dofs, params.afo, reference_dof, params.dof_coupling)
+            offset = 1.0
+        self.normaliser = RunningNormaliser(n_dofs, dt, params.normaliser_time_constant_s, offset)
+        # Columns: the d DOFs, then the oscillator's Omega (its mean over the window is the
+        # fundamental, free of the ripple the coupling term puts on the instantaneous value).
+        self.statistics = PeriodStatistics(n_dofs + 1, dt, anchor_capacity(dt, params),
+                                           params.statistics_periods)
+        self.derivatives = CentredDerivatives(n_dofs, dt, params.derivative_window_periods,
+                                              params.derivative_degree, params.max_derivative_window)
+        self.lwr = IncrementalLWR(params.kernels, n_dofs, params.forgetting, params.p0)
+        self.dmp = PeriodicDMP(self.lwr.weights_, np.zeros(n_dofs), np.ones(n_dofs), width,
+                               params.alpha_s, params.beta_s)
+        self.goal_ = np.zeros(n_dofs)
+        self.amplitude_ = np.ones(n_dofs)
+        self.count_ = 0
+        self._previous_input = np.zeros(n_dofs)
+        self._previous_phase = 0.0
+        self._previous_omega = 0.0
+        self.omega_ = 0.0
+
+    def step(self, y: np.ndarray) -> np.ndarray:
+        """Process one sample y (d,) in m; return the DMP output (d,) at the same time."""
+        p = self.params
+        y = np.asarray(y, dtype=np.float64)
+        u = self.normaliser.update(y)
+        if self.count_ == 0:
+            self._previous_input = u
+            self.dmp.reset(y, np.zeros_like(y))
+        self.canonical.advance(self._previous_input, u, self.dt, self.n_sub)
+        self._previous_input = u
+        phase, omega_now = self.canonical.fundamental
+        means, amplitude = self.statistics.update(np.append(y, omega_now), omega_now)
+        self.goal_ = means[:-1]
+        self.amplitude_ = np.where(amplitude[:-1] > 0.0, amplitude[:-1], 1.0)
+        omega = self.omega_ = max(means[-1], 2.0 * math.pi * p.min_frequency_hz)
+        self.derivatives.push(y, phase, omega)
+        centre = self.derivatives.centre(omega)
+        if centre is not None:
+            yc, ydc, yddc, phase_c, omega_c = centre
+            f_target = forcing_target(yc, ydc, yddc, omega_c, self.goal_, p.alpha_s, p.beta_s)
+            psi = kernel_activations(phase_c, p.kernels, p.kernel_width)
+            # f_targ ~ w r, regressed in units of r: the prior P0 = 1 then weighs the same for
+            # any scale of the movement (with r in metres it would outweigh seconds of data).
+            self.lwr.update(psi, np.ones_like(self.amplitude_), f_target / self.amplitude_,
+                            forgetting_factor(p, omega_c * self.dt))
+        self.dmp.goal, self.dmp.amplitude = self.goal_, self.amplitude_
+        if self.count_ > 0:
+            self.dmp.step(self._previous_phase, self._previous_omega, self.dt)
+        self._previous_phase, self._previous_omega = phase, omega
+        self.count_ += 1
+        return self.dmp.y_.copy()
+
+    @property
+    def weights_(self) -> np.ndarray:
+        """Current weights, shape (d, N)."""
+        return self.lwr.weights_
+
+
+def forgetting_factor(params: OnlineParameters, phase_step: float) -> float:
+    """lambda for one sample that advances the phase by ``phase_step`` (rad).
+
+    Eq. 14 forgets per sample, so its memory in periods shrinks with the sample rate: at
+    500 Hz and 0.3 Hz, lambda = 0.99 remembers 0.06 periods, shorter than a kernel's pass,
+    and each weight is biased towards the latest samples (a phase lag). Counted per
+    1/``forgetting_samples_per_period`` of a period instead, the paper's lambda keeps the
+    memory it has at 100 samples per period at every rate and frequency.
+    """
+    if params.forgetting_samples_per_period is None:
+        return params.forgetting
+    return params.forgetting ** (phase_step * params.forgetting_samples_per_period / (2.0 * math.pi))
+
+
+def anchor_capacity(dt: float, params: OnlineParameters) -> int:
+    """Ring-buffer length of the period statistics: the longest window in samples, plus 2."""
+    return int(math.ceil(params.statistics_periods / (params.min_frequency_hz * dt))) + 2
+
+
+def build_model(dofs, params: OnlineParameters, frequency_hz: float, phase: float, t_last: float,
+                weights, goal, amplitude, source: dict) -> PeriodicModel:
+    """A PeriodicModel from a learner's final state; phase_offset extrapolates phi back to t = 0."""
+    omega = 2.0 * math.pi * frequency_hz
+    return PeriodicModel(
+        frequency_hz=float(frequency_hz), dofs=tuple(dofs), kernels=params.kernels,
+        width=params.kernel_width, alpha_s=params.alpha_s, beta_s=params.beta_s,
+        goal=np.array(goal), amplitude=np.array(amplitude), weights=np.array(weights),
+        phase_offset=_wrap(phase - omega * t_last), source=source)
+
+
+def learn_online(t: np.ndarray, Y: np.ndarray, params: OnlineParameters = OnlineParameters(),
+                 dofs=None, reference_dof: int = 0, source: dict | None = None,
+                 progress: Callable[[int], None] | None = None, reference: bool = False,
+                 chunk: int = 2048) -> tuple[PeriodicModel, LearnHistory]:
+    """Learn a periodic model online, sample by sample.
+
+    Parameters
+    ----------
+    t : ndarray, shape (n,)
+        Uniformly spaced sample times (s).
+    Y : ndarray, shape (n, d)
+        The demonstration (m).
+    params : OnlineParameters
+    dofs : sequence of str, optional
+        DOF names (default "q0", "q1", ...).
+    reference_dof : int
+        The DOF that defines phase 0.
+    source : dict, optional
+        Provenance stored in the model.
+    progress : callable, optional
+        Called with the number of samples processed after each chunk.
+    reference : bool
+        Run the numpy reference implementation instead of the numba kernel (slow; for tests).
+    chunk : int
+        Samples per call of the kernel (granularity of ``progress``).
+
+    Returns
+    -------
+    model : PeriodicModel
+        The final weights, the fundamental averaged over the last period, g and r over the
+        last period, and the phase extrapolated back to t = 0.
+    history : LearnHistory
+    """
+    if not reference:
+        from wipelab.learning._online_kernel import FastOnlineLearner
+
+    t = np.asarray(t, dtype=np.float64)
+    Y = np.asarray(Y, dtype=np.float64)
+    n, d = Y.shape
+    dt = float((t[-1] - t[0]) / (n - 1))
+    dofs = tuple(dofs) if dofs is not None else tuple(f"q{j}" for j in range(d))
+    learner = OnlineLearner(d, dt, params, reference_dof) if reference else \
+        FastOnlineLearner(d, dt, params, reference_dof)
+    every = max(1, int(round(params.weights_every_s / dt)))
+    output = np.empty((n, d))
+    phase = np.empty(n)
+    fundamental = np.empty(n)
+    n_osc = 3 if params.canonical == "afo" else 1
+    oscillators = np.empty((n, n_osc))
+    snapshots = []
+    for start in range(0, n, chunk):
+        stop = min(n, start + chunk)
+        if reference:
+            for k in range(start, stop):
+                output[k] = learner.step(Y[k])
+                phase[k] = learner.canonical.fundamental[0]
+                fundamental[k] = learner.omega_ / (2.0 * math.pi)
+                oscillators[k] = learner.canonical.frequencies_hz
+                if k % every == 0:
+                    snapshots.append(learner.weights_.copy())
+        else:
+            snapshots.extend(learner.process(Y[start:stop], output[start:stop], phase[start:stop],
+                                             fundamental[start:stop], oscillators[start:stop], every))
+        if progress is not None:
+            progress(stop - start)
+    period = max(1, int(round(1.0 / (fundamental[-1] * dt))))
+    frequency_hz = float(fundamental[-period:].mean())
+    model = build_model(dofs, params, frequency_hz, phase[-1], t[-1], learner.weights_,
+                        learner.goal_, learner.amplitude_, source or {})
+    history = LearnHistory(t=t, input=Y, output=output, phase=phase, fundamental_hz=fundamental,
+                           oscillators_hz=oscillators, weights_t=t[::every],
+                           weights=np.array(snapshots).reshape(-1, d, params.kernels))
+    return model, history

@@ -1,0 +1,82 @@
+"""What the two canonical systems share: gain scaling, substepping and the multi-DOF phase drive.
+
+Gains scaled with the frequency. Eqs. 1-2 with constant gains behave very differently over
+the 0.3-3 Hz of human wiping: a coupling K that locks quickly at 3 Hz exceeds Omega at
+0.3 Hz, where the coupling term then dominates phi' and warps the phase within each period.
+With ``scale_with_frequency`` the gains are given at 1 Hz and scaled as K (Omega / 2 pi),
+K_Omega (Omega / 2 pi)^2 and nu (Omega / 2 pi): written in phase time the loop is then the same
+at every frequency, and so is its convergence measured in periods. Eq. 2 also gets its own
+gain K_Omega: with K_Omega = K (eqs. 1-2 as printed) the linearised loop
+s^2 + k s + k = 0 (k = K A / 2) keeps a pole near -1 rad/s however large K is.
+
+Several DOFs share one phase. The *reference* DOF defines it: its component at an
+oscillator's frequency is a pure cosine of that oscillator's phase (the beta coefficient is
+held at 0, as in Petric et al.), so its error drives the phase through e sin(phi) exactly as
+in eqs. 1-2. Every other DOF learns a cosine and a sine coefficient (alpha, beta), i.e. its
+own phase lag theta = atan2(beta, alpha); with ``dof_coupling = "sum"`` it also drives the
+shared phase with e sin(phi - theta) — the same correction seen in its own phase frame —
+faded out while its amplitude R = |(alpha, beta)| is small (factor R / (R + R_FADE)).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: Normalised amplitude below which a non-reference DOF's phase drive is faded out.
+R_FADE = 0.1
+
+DOF_COUPLINGS = ("sum", "reference")
+
+#: Frequency at which scaled gains are specified: 1 Hz, in rad/s.
+REFERENCE_OMEGA = 2.0 * math.pi
+
+
+def gain_scale(omega: float, scale_with_frequency: bool) -> float:
+    """m = |Omega| / (2 pi rad/s) when gains scale with the frequency, else 1."""
+    return abs(omega) / REFERENCE_OMEGA if scale_with_frequency else 1.0
+
+
+def phase_drive(error: np.ndarray, phase, alpha1: np.ndarray, beta1: np.ndarray, reference: int,
+                sum_coupling: bool) -> np.ndarray:
+    """The coupling term of eqs. 1-2 for several DOFs: K times this is subtracted from phi' and omega'.
+
+    Parameters
+    ----------
+    error : ndarray, shape (d,)
+        e_j = y_j - y_hat_j of eq. 3 per DOF (normalised units).
+    phase : float or ndarray, shape (m,)
+        Oscillator phase(s) phi (rad).
+    alpha1, beta1 : ndarray, shape (d,) or (m, d)
+        Each DOF's cosine and sine coefficients at the oscillator(s).
+    reference : int
+        Index of the reference DOF.
+    sum_coupling : bool
+        Whether the other DOFs contribute (``"sum"``) or only the reference (``"reference"``).
+
+    Returns
+    -------
+    float or ndarray, shape (m,)
+    """
+    phase = np.asarray(phase, dtype=np.float64)
+    sin_phi, cos_phi = np.sin(phase)[..., None], np.cos(phase)[..., None]
+    drive = error[reference] * np.sin(phase)
+    if sum_coupling:
+        amplitude = np.hypot(alpha1, beta1)
+        terms = error * (alpha1 * sin_phi - beta1 * cos_phi) / (amplitude + R_FADE)
+        others = np.ones(error.shape[0], dtype=bool)
+        others[reference] = False
+        drive = drive + (terms * others).sum(axis=-1)
+    return drive
+
+
+def substep_count(dt: float, substep_hz: float) -> int:
+    """Euler substeps per sample so that the oscillators integrate at >= substep_hz."""
+    return max(1, int(np.ceil(dt * substep_hz - 1e-9)))
+
+
+def interpolated_inputs(previous: np.ndarray, current: np.ndarray, n_sub: int) -> np.ndarray:
+    """Inputs at the end of each substep, linear between two samples; shape (n_sub, d)."""
+    fractions = np.arange(1, n_sub + 1)[:, None] / n_sub
+    return previous + fractions * (current - previous)

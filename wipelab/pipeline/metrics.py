@@ -1,0 +1,66 @@
+"""The numbers a run produced: every stage's ``metrics.json`` and the learned frequency.
+
+Used by the data set summary table and the report. Keys are ``<stage>.<name>``, nested
+objects are joined with dots (``adapt.force.rms_error_n``); only finite numbers are kept.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+from wipelab.pipeline.cache import read_record
+
+#: Per-stage files whose numbers are collected, and the keys taken from each
+#: (None: every number in the file).
+METRIC_FILES: dict[str, tuple[str, ...] | None] = {
+    "metrics.json": None,
+    "model.json": ("frequency_hz",),
+    "adapted_model.json": ("frequency_hz",),
+}
+
+
+def run_metrics(run_dir: str | Path) -> dict[str, float]:
+    """Metrics of every finished stage in ``run_dir`` (stages without a record are skipped).
+
+    Returns
+    -------
+    dict[str, float]
+        ``{"<stage>.<key>": value}``, sorted by key.
+    """
+    run_dir = Path(run_dir)
+    metrics: dict[str, float] = {}
+    for stage_dir in sorted(p for p in run_dir.iterdir() if p.is_dir()):
+        if read_record(stage_dir) is None:
+            continue
+        for file_name, keys in METRIC_FILES.items():
+            path = stage_dir / file_name
+            if not path.is_file():
+                continue
+            data = json.loads(path.read_text())
+            if keys is not None:
+                data = {key: data[key] for key in keys if key in data}
+            metrics.update(flatten_numbers(data, prefix=stage_dir.name))
+    return dict(sorted(metrics.items()))
+
+
+def flatten_numbers(data: Any, prefix: str) -> dict[str, float]:
+    """``{"a": {"b": 1.5}, "c": "x"}`` -> ``{"<prefix>.a.b": 1.5}``: finite numbers only.
+
+    Lists of numbers get their index in the key (``replay.scale.0``).
+    """
+    if isinstance(data, bool):
+        return {}
+    if isinstance(data, int | float):
+        return {prefix: float(data)} if math.isfinite(data) else {}
+    items: Any = ()
+    if isinstance(data, dict):
+        items = data.items()
+    elif isinstance(data, list):
+        items = enumerate(data)
+    flat: dict[str, float] = {}
+    for key, value in items:
+        flat.update(flatten_numbers(value, f"{prefix}.{key}"))
+    return flat

@@ -1,0 +1,92 @@
+"""Executing a periodic movement model at any frequency, placed in front of the robot.
+
+Where the movement goes: a model's positions are in the world frame of its demonstration.
+:func:`place_model` moves it onto the table in front of the robot: the centre of the x-y
+path's bounding box (the paper's demonstration-area centre, Fig. 3) is put at ``centre``
+(x, y in m, world; adapt's ``--center``, by default the surface's wiping centre) and the
+oscillation about it is scaled by ``amplitude_scale``. Goals move, weights stay: the DMP's
+limit cycle is translated exactly (eqs. 6-7 are linear in g).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from wipelab.errors import InputError
+from wipelab.learning.limit_cycle import limit_cycle
+from wipelab.learning.model import PeriodicModel
+
+#: Phases (rad) on which a model's path is sampled for placement and checks.
+PATH_PHASES = np.linspace(0.0, 2.0 * math.pi, 256, endpoint=False)
+
+
+def require_dofs(model: PeriodicModel, dofs, source: str) -> None:
+    """InputError unless the model has all of ``dofs``."""
+    missing = [d for d in dofs if d not in model.dofs]
+    if missing:
+        raise InputError(f"{source}: the model has DOFs {list(model.dofs)}; "
+                         f"needs {', '.join(missing)}")
+
+
+def dof_waveform(model: PeriodicModel, dofs, phases=PATH_PHASES, derivative: int = 0
+                 ) -> np.ndarray:
+    """Limit-cycle values (n, k) of the named DOFs at ``phases`` (phase derivatives if
+    ``derivative`` > 0)."""
+    index = [model.dofs.index(d) for d in dofs]
+    return limit_cycle(phases, model.weights[index], model.goal[index], model.amplitude[index],
+                       model.width, model.alpha_s, model.beta_s, derivative=derivative)
+
+
+def path_centre(model: PeriodicModel) -> np.ndarray:
+    """Centre (2,) of the bounding box of the model's x-y path (m)."""
+    xy = dof_waveform(model, ("x", "y"))
+    return 0.5 * (xy.min(axis=0) + xy.max(axis=0))
+
+
+def place_model(model: PeriodicModel, centre, amplitude_scale: float = 1.0) -> PeriodicModel:
+    """The model with its x-y path scaled about its goal and centred at ``centre`` (2,)."""
+    index = [model.dofs.index("x"), model.dofs.index("y")]
+    amplitude = model.amplitude.copy()
+    amplitude[index] *= amplitude_scale
+    scaled = replace(model, amplitude=amplitude)
+    goal = scaled.goal.copy()
+    goal[index] += np.asarray(centre, dtype=float) - path_centre(scaled)
+    return replace(scaled, goal=goal)
+
+
+class PathGenerator:
+    """Runs some DOFs of a model at a chosen frequency, sharing one phase.
+
+    The output is the periodic DMP's steady state (its limit cycle, eqs. 6-7 solved in closed
+    form by :func:`wipelab.learning.limit_cycle.limit_cycle`): started on it, integrating
+    eqs. 6-7 gives exactly this, and the limit cycle does not depend on Omega, so a
+    frequency change only changes how fast the phase runs.
+
+    Parameters
+    ----------
+    model : PeriodicModel
+    dofs : sequence of str
+        DOFs to run (e.g. ``("x", "y")`` or ``("x", "y", "z")``).
+    phase : float
+        Start phase (rad).
+    """
+
+    def __init__(self, model: PeriodicModel, dofs, phase: float = 0.0):
+        self.model, self.dofs = model, tuple(dofs)
+        self.phase = float(phase)
+
+    @property
+    def position(self) -> np.ndarray:
+        """Output (d,) (m) at the current phase."""
+        return dof_waveform(self.model, self.dofs, [self.phase])[0]
+
+    def step(self, omega: float, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """Advance the phase by omega dt (rad/s, s); returns the position (d,) (m) and the
+        acceleration (d,) (m/s^2) there (the feed-forward of the inertia compensation)."""
+        self.phase += omega * dt
+        position = dof_waveform(self.model, self.dofs, [self.phase])[0]
+        acceleration = dof_waveform(self.model, self.dofs, [self.phase], derivative=2)[0]
+        return position, acceleration * omega ** 2

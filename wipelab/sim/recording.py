@@ -1,0 +1,185 @@
+"""Logging a wiping run to MCAP and Rerun (through :class:`wipelab.logs.StageRecorder`).
+
+Topics (``<stage>`` is ``adapt`` or ``replay``; all times are simulated seconds):
+
+- ``/tf``: every URDF joint as a frame transform (parent link -> child link): fixed and held
+  joints once, the 10 moving joints at ``POSE_RATE_HZ``; plus ``world -> sponge``.
+- ``/robot/joint_states/position``, ``/robot/joint_states/command``: torso + right arm (rad).
+- ``/<stage>/wrench``: raw F/T reading (sensor frame ``hand_r``, N and N m).
+- ``/<stage>/force``: contact force as the controller sees it (world, N) and its length;
+  ``/<stage>/force_arrow``: that force drawn at the sponge (1 cm per N).
+- ``/<stage>/height``: commanded, actual and reference TCP z (m).
+- ``/<stage>/force_norm``: |F|, F_0 and the true normal force on the sponge (N) - with
+  ``/<stage>/height`` the paper's Figs. 6-7.
+- ``/<stage>/contact``: contact (0/1), sponge compression (m), compliance velocity (m/s).
+- ``/<stage>/segment``: the segment label over time (learning 1 -> 0 marks the end of
+  learning); ``/<stage>/events``: one JSON message per segment start.
+- ``/<stage>/tcp_commanded``, ``/<stage>/tcp_actual``: TCP poses (``PoseInFrame``).
+- ``/adapt/learned_profile``: the learned z along the path after each period (3D line) and
+  ``/adapt/profile`` (JSON: period, waveform) - how the profile converges.
+- ``/scene/surface``: the surface's grid points; Rerun also gets the robot model from the URDF
+  (``/armar3b``), the sponge box and the surface as a mesh.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import rerun as rr
+import rerun.blueprint as rrb
+from rerun.urdf import UrdfTree
+
+from wipelab.control.force_profile import COMPARISON_PHASES
+from wipelab.learning.model import PeriodicModel
+from wipelab.logs import StageRecorder
+from wipelab.sim.armar3 import RIGHT_ARM_JOINTS, TORSO_JOINTS, armar3b_urdf_path
+from wipelab.sim.kinematics import parse_urdf_joints, quaternion_xyzw_from_rotation
+from wipelab.sim.path import PATH_PHASES, dof_waveform
+
+#: Rate (Hz) of the 3D scene in the logs (poses, /tf, force arrow).
+POSE_RATE_HZ = 15.0
+#: Length of the force arrow per newton (m/N).
+ARROW_SCALE = 0.01
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A part of a run: its name, the trace mode label and its start time (s)."""
+
+    name: str
+    mode: int
+    start: float
+
+
+def wiping_blueprint(stage: str) -> rrb.Blueprint:
+    """The default Rerun layout: the scene beside height, force and joint plots."""
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Spatial3DView(origin="/", name="robot and surface"),
+            rrb.Vertical(
+                rrb.TimeSeriesView(origin=f"/{stage}/height", name="height (m)"),
+                rrb.TimeSeriesView(origin=f"/{stage}/force_norm", name="|F| (N)"),
+                rrb.TimeSeriesView(origin=f"/{stage}/segment", name="segment"),
+                rrb.TimeSeriesView(origin="/robot/joint_states", name="joints (rad)"),
+            ),
+            column_shares=[3, 2],
+        ),
+        collapse_panels=True,
+    )
+
+
+def _transform(pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return pose[:3, 3], quaternion_xyzw_from_rotation(pose[:3, :3])
+
+
+def _log_static_scene(rec: StageRecorder, task, t0: float) -> None:
+    urdf_path = armar3b_urdf_path()
+    rec.attach("armar3b.urdf", urdf_path.read_bytes(), "application/xml")
+    UrdfTree.from_file_path(urdf_path).log_urdf_to_recording(rec.rerun)
+    rec.rerun.log("/tf/world", rr.Transform3D(parent_frame="tf#/", child_frame="world"),
+                  static=True)
+    joints = parse_urdf_joints(urdf_path.read_text())
+    held = dict(task.options.base.joint_values())
+    transforms = []
+    for joint in joints.values():
+        if joint.name in TORSO_JOINTS or joint.name in RIGHT_ARM_JOINTS:
+            continue
+        translation, quaternion = _transform(joint.transform(held.get(joint.name, 0.0)))
+        transforms.append((joint.parent, joint.child, translation, quaternion))
+    rec.transforms(t0, transforms)
+    size = np.asarray(task.options.sponge.size)
+    rec.rerun.log("/robot/sponge", rr.CoordinateFrame("sponge"),
+                  rr.Boxes3D(half_sizes=[size / 2], colors=[(240, 200, 30)], fill_mode="solid"),
+                  static=True)
+    grid = task.surface.grid_points()
+    step = max(1, int(round(0.02 / task.surface.cell)))
+    rec.points3d("/scene/surface", t0, grid[::step, ::step].reshape(-1, 3),
+                 colors=(170, 140, 110), radii=0.002)
+    nx, ny = grid.shape[:2]
+    index = np.arange(nx * ny).reshape(nx, ny)
+    a, b, c, d = (index[:-1, :-1].ravel(), index[1:, :-1].ravel(), index[1:, 1:].ravel(),
+                  index[:-1, 1:].ravel())
+    triangles = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    rec.rerun.log("/scene/surface_mesh", rr.Mesh3D(vertex_positions=grid.reshape(-1, 3),
+                                                   triangle_indices=triangles,
+                                                   albedo_factor=(180, 150, 120, 255)),
+                  static=True)
+
+
+def _log_poses(rec: StageRecorder, stage: str, task, trace: dict) -> None:
+    urdf_joints = parse_urdf_joints(armar3b_urdf_path().read_text())
+    active = [urdf_joints[name] for name in TORSO_JOINTS + RIGHT_ARM_JOINTS]
+    t = trace["t"]
+    every = max(1, int(round(1.0 / (POSE_RATE_HZ * task.world.config.dt))))
+    for k in range(0, len(t), every):
+        transforms = []
+        for joint, value in zip(active, trace["q"][k]):
+            translation, quaternion = _transform(joint.transform(value))
+            transforms.append((joint.parent, joint.child, translation, quaternion))
+        transforms.append(("world", "sponge", trace["sponge_pos"][k], trace["sponge_quat"][k]))
+        rec.transforms(t[k], transforms)
+        rec.pose(f"/{stage}/tcp_commanded", t[k], "world", trace["tcp_cmd"][k],
+                 quaternion_xyzw_from_rotation(trace["tcp_rot"][k]))
+        rec.pose(f"/{stage}/tcp_actual", t[k], "world", trace["tcp"][k],
+                 quaternion_xyzw_from_rotation(trace["tcp_rot"][k]))
+        rec.arrow3d(f"/{stage}/force_arrow", t[k], trace["sponge_pos"][k],
+                    ARROW_SCALE * trace["force"][k])
+
+
+def _log_series(rec: StageRecorder, stage: str, task, trace: dict, segments) -> None:
+    t = trace["t"]
+    names = list(TORSO_JOINTS + RIGHT_ARM_JOINTS)
+    rec.scalars("/robot/joint_states/position", t, trace["q"], names=names)
+    rec.scalars("/robot/joint_states/command", t, trace["q_cmd"], names=names)
+    rec.scalars(f"/{stage}/wrench", t, trace["wrench"],
+                names=["fx", "fy", "fz", "tx", "ty", "tz"])
+    norm = np.linalg.norm(trace["force"], axis=1)
+    rec.scalars(f"/{stage}/force", t, np.column_stack([trace["force"], norm]),
+                names=["fx", "fy", "fz", "norm"])
+    rec.scalars(f"/{stage}/height", t, np.column_stack([trace["tcp_cmd"][:, 2],
+                                                        trace["tcp"][:, 2], trace["z_ref"]]),
+                names=["commanded", "actual", "reference"])
+    target = np.full(len(t), task.options.compliance.target_force)
+    rec.scalars(f"/{stage}/force_norm", t, np.column_stack([norm, target, trace["sponge_force"]]),
+                names=["measured |F|", "F0", "true contact"])
+    contact = (trace["sponge_force"] > 1.0).astype(float)
+    rec.scalars(f"/{stage}/contact", t, np.column_stack([contact, trace["compression"],
+                                                         trace["vz"]]),
+                names=["contact", "compression_m", "compliance_velocity"])
+    rec.scalars(f"/{stage}/segment", t, trace["mode"].astype(float), names=["segment"])
+    rec.scalars(f"/{stage}/phase", t, np.mod(np.nan_to_num(trace["phase"]), 2 * np.pi),
+                names=["phase"])
+    for segment in segments:
+        rec.json(f"/{stage}/events", max(segment.start, float(t[0])),
+                 {"event": segment.name, "mode": segment.mode}, "wipelab.Event",
+                 {"type": "object", "properties": {"event": {"type": "string"},
+                                                   "mode": {"type": "integer"}}})
+
+
+def _log_profiles(rec: StageRecorder, model: PeriodicModel, profiles) -> None:
+    xy = dof_waveform(model, ("x", "y"), COMPARISON_PHASES)
+    schema = {"type": "object", "properties": {"period": {"type": "integer"},
+                                               "phase": {"type": "array"},
+                                               "z": {"type": "array"}}}
+    for period, (time, z) in enumerate(profiles, start=1):
+        rec.line_strip3d("/adapt/learned_profile", time, np.column_stack([xy, z]),
+                         color=(40, 160, 255))
+        rec.json("/adapt/profile", time, {"period": period, "phase": COMPARISON_PHASES.tolist(),
+                                          "z": np.asarray(z).tolist()}, "wipelab.Profile", schema)
+
+
+def log_run(rec: StageRecorder, stage: str, task, trace: dict, segments, profiles=(),
+            model: PeriodicModel | None = None) -> None:
+    """Log one run's trace (see the module docstring for the topics)."""
+    t0 = float(trace["t"][0])
+    _log_static_scene(rec, task, t0)
+    if model is not None:
+        path = dof_waveform(model, ("x", "y"), PATH_PHASES)
+        z = task.start_height if "z" not in model.dofs else dof_waveform(model, ("z",))[:, 0]
+        rec.line_strip3d(f"/{stage}/path", t0, np.column_stack([path, np.broadcast_to(
+            z, len(path))]), color=(255, 255, 255))
+    _log_series(rec, stage, task, trace, segments)
+    _log_poses(rec, stage, task, trace)
+    if profiles:
+        _log_profiles(rec, model, profiles)

@@ -1,0 +1,257 @@
+"""The learn and rollout stages: a demonstration -> a periodic movement model -> a trajectory.
+
+``learn`` reads a Trajectory CSV, checks that the chosen DOFs move periodically, learns the
+two-layer model (online by default, as the robot watching the demonstration would; or offline
+over the whole recording) and writes ``model.json``, ``learn.mcap``, ``learn.rrd`` and
+``manifest.json``. ``rollout`` integrates a model into a Trajectory CSV at any frequency,
+amplitude and anchor.
+
+Logged topics (MCAP topic = Rerun entity), time = the input's time in seconds:
+
+    /input/trajectory             the demonstration, one series per DOF (m)
+    /oscillators/frequency_hz     every oscillator's frequency (AFO pool: omega_1..3, Fig. 4)
+    /oscillators/fundamental_hz   the selected fundamental Omega / 2 pi
+    /dmp/<dof>/waveform           input vs learned movement of one DOF (m, Fig. 5)
+    /dmp/<dof>/weights            the weights w_00.. as they converge
+    /model                        model.json at the end of the input (schema wipelab.Model)
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+import rerun.blueprint as rrb
+from tqdm import tqdm
+
+from wipelab.errors import InputError
+from wipelab.learning import (CANONICAL_SYSTEMS, MODEL_FORMAT, LearnHistory, OfflineParameters,
+                              OnlineParameters, PeriodicModel, harmonic_fit, learn_offline,
+                              learn_online, periodicity, to_uniform)
+from wipelab.logs import StageRecorder
+from wipelab.manifest import build_manifest, sha256_file, write_json
+from wipelab.stage_output import staged_output
+from wipelab.trajectory_csv import read_trajectory, write_trajectory
+
+MODES = ("online", "offline")
+#: Fewest samples a demonstration may have.
+MIN_SAMPLES = 20
+
+
+@dataclass(frozen=True)
+class LearnParams:
+    """Parameters of ``wipelab learn`` (CLI flags in brackets)."""
+
+    mode: str = "online"                 # [--mode] online (sample by sample) or offline
+    dofs: tuple[str, ...] = ("x", "y")   # [--dofs] columns to learn, world frame (m)
+    kernels: int = 25                    # [--kernels] N
+    width: float | None = None           # [--width] h of eq. 8; None -> 2.5 N
+    canonical: str = "afs"               # [--canonical] afs or afo (online mode)
+    seed: int = 0                        # [--seed] recorded; learning draws no random numbers
+    min_frequency_hz: float = 0.1        # fundamentals searched in [min, max] (Hz)
+    max_frequency_hz: float = 5.0
+    min_periodicity: float = 0.5         # refuse input whose periodicity score is lower
+    min_periods: float = 3.0             # refuse input shorter than this many periods
+
+    def __post_init__(self):
+        if self.mode not in MODES:
+            raise InputError(f"--mode: must be one of {', '.join(MODES)}, got {self.mode!r}")
+        if self.canonical not in CANONICAL_SYSTEMS:
+            raise InputError(f"--canonical: must be one of {', '.join(CANONICAL_SYSTEMS)}, "
+                             f"got {self.canonical!r}")
+        if not self.dofs or len(set(self.dofs)) != len(self.dofs) or "t" in self.dofs \
+                or not all(self.dofs):
+            raise InputError(f"--dofs: need distinct column names other than t, got "
+                             f"{','.join(self.dofs)!r}")
+        if self.kernels < 2:
+            raise InputError(f"--kernels: must be at least 2, got {self.kernels}")
+        if self.width is not None and not self.width > 0:
+            raise InputError(f"--width: must be positive, got {self.width}")
+
+
+def learn_blueprint(dofs) -> rrb.Blueprint:
+    """Default Rerun layout: frequencies on top, then per DOF its waveform and its weights."""
+    return rrb.Blueprint(
+        rrb.Vertical(
+            rrb.Horizontal(rrb.TimeSeriesView(origin="/oscillators", name="frequencies (Hz)"),
+                           rrb.TextDocumentView(origin="/model", name="model")),
+            rrb.Horizontal(*[rrb.TimeSeriesView(origin=f"/dmp/{dof}/waveform",
+                                                name=f"{dof}: input vs learned (m)")
+                             for dof in dofs]),
+            rrb.Horizontal(*[rrb.TimeSeriesView(origin=f"/dmp/{dof}/weights",
+                                                name=f"{dof}: weights") for dof in dofs]),
+            row_shares=[1, 2, 1]),
+        collapse_panels=True)
+
+
+def _demonstration(path: Path, params: LearnParams) -> tuple[np.ndarray, np.ndarray]:
+    """The chosen DOFs on a uniform time grid; InputError for unusable input."""
+    trajectory = read_trajectory(path, required=("t", *params.dofs))
+    if trajectory.t[0] < 0.0:
+        raise InputError(f"{path}: time column t starts at {trajectory.t[0]:g} s; "
+                         f"times are seconds since the start of the recording (>= 0)")
+    if int(trajectory.valid.sum()) < MIN_SAMPLES:
+        raise InputError(f"{path}: too short, {int(trajectory.valid.sum())} valid rows, "
+                         f"need at least {MIN_SAMPLES}")
+    return to_uniform(trajectory.t, trajectory.array(params.dofs), trajectory.valid)
+
+
+def _check_periodic(path: Path, t: np.ndarray, Y: np.ndarray, params: LearnParams):
+    estimate = periodicity(t, Y, params.min_frequency_hz, params.max_frequency_hz)
+    if estimate.periods < params.min_periods:
+        raise InputError(f"{path}: too short, {estimate.periods:.1f} periods of "
+                         f"{estimate.frequency_hz:.3g} Hz, need at least {params.min_periods:g}")
+    if estimate.score < params.min_periodicity:
+        raise InputError(f"{path}: the movement of {','.join(params.dofs)} is not periodic "
+                         f"(periodicity {estimate.score:.2f} < {params.min_periodicity:g})")
+    return estimate
+
+
+def learn(trajectory: str | os.PathLike, out_dir: str | os.PathLike,
+          params: LearnParams = LearnParams(), quiet: bool = False) -> PeriodicModel:
+    """Learn a periodic movement model from a Trajectory CSV.
+
+    Parameters
+    ----------
+    trajectory : path-like
+        Trajectory CSV (DESIGN.md) with columns t and ``params.dofs``.
+    out_dir : path-like
+        Receives model.json, learn.mcap, learn.rrd, manifest.json (all or nothing).
+    params : LearnParams
+    quiet : bool
+        No progress bar.
+
+    Returns
+    -------
+    PeriodicModel
+
+    Raises
+    ------
+    InputError
+        Missing/unreadable file, missing columns, NaN/inf, too short, time not increasing,
+        movement not periodic.
+    """
+    path = Path(trajectory)
+    t, Y = _demonstration(path, params)
+    estimate = _check_periodic(path, t, Y, params)
+    # Phase 0 is where the DOF with the strongest fundamental peaks.
+    reference = int(np.argmax(harmonic_fit(t, Y, estimate.frequency_hz).fundamental))
+    parameters = asdict(params) | {"dofs": list(params.dofs)}
+    source = {"file": path.name, "sha256": sha256_file(path), "stage": "learn",
+              "parameters": parameters, "reference_dof": params.dofs[reference],
+              "periodicity": round(estimate.score, 6)}
+    if params.mode == "online":
+        online = OnlineParameters(canonical=params.canonical, kernels=params.kernels,
+                                  width=params.width)
+        with tqdm(total=t.size, desc="learn", unit="sample", disable=quiet, file=sys.stderr,
+                  leave=False) as bar:
+            model, history = learn_online(t, Y, online, params.dofs, reference, source,
+                                          progress=bar.update)
+    else:
+        offline = OfflineParameters(kernels=params.kernels, width=params.width,
+                                    min_frequency_hz=params.min_frequency_hz,
+                                    max_frequency_hz=params.max_frequency_hz)
+        model, history = learn_offline(t, Y, offline, params.dofs, reference, source)
+    inputs = {"trajectory": path}
+    with staged_output(out_dir) as tmp:
+        write_json(tmp / "model.json", model.to_dict())
+        with StageRecorder(tmp, "learn", parameters, inputs, learn_blueprint(params.dofs)) as rec:
+            _log(rec, model, history)
+        write_json(tmp / "manifest.json", build_manifest("learn", inputs, parameters, params.seed))
+    return model
+
+
+def _log(rec: StageRecorder, model: PeriodicModel, history: LearnHistory) -> None:
+    """Everything the learner went through (see the module docstring for the topics)."""
+    t = history.t
+    rec.scalars("/input/trajectory", t, history.input, names=model.dofs)
+    names = ["omega"] if history.oscillators_hz.shape[1] == 1 else \
+        [f"omega_{i + 1}" for i in range(history.oscillators_hz.shape[1])]
+    rec.scalars("/oscillators/frequency_hz", t, history.oscillators_hz, names=names)
+    rec.scalars("/oscillators/fundamental_hz", t, history.fundamental_hz, names=["fundamental"])
+    weight_names = [f"w_{i:02d}" for i in range(model.kernels)]
+    for j, dof in enumerate(model.dofs):
+        rec.scalars(f"/dmp/{dof}/waveform", t,
+                    np.column_stack([history.input[:, j], history.output[:, j]]),
+                    names=["input", "learned"])
+        rec.scalars(f"/dmp/{dof}/weights", history.weights_t, history.weights[:, j, :],
+                    names=weight_names)
+    rec.json("/model", float(t[-1]), model.to_dict(), schema_name="wipelab.Model",
+             schema={"title": "wipelab.Model", "type": "object",
+                     "properties": {"format": {"const": MODEL_FORMAT}},
+                     "required": ["format", "frequency_hz", "dofs", "weights"]})
+
+
+def read_model(path: str | os.PathLike) -> PeriodicModel:
+    """Load model.json; InputError naming the file if it is missing, not JSON, or not a model."""
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise InputError(f"{path}: file not found") from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise InputError(f"{path}: cannot be read ({error.__class__.__name__}: {error})") from None
+    except json.JSONDecodeError as error:
+        raise InputError(f"{path}: not JSON ({error})") from None
+    try:
+        return PeriodicModel.from_dict(data)
+    except ValueError as error:
+        raise InputError(f"{path}: {error}") from None
+
+
+def _per_dof(option: str, values, model: PeriodicModel) -> np.ndarray | None:
+    if values is None:
+        return None
+    values = np.asarray(values, dtype=np.float64)
+    if values.shape != (len(model.dofs),) or not np.all(np.isfinite(values)):
+        raise InputError(f"{option}: need {len(model.dofs)} finite numbers "
+                         f"({','.join(model.dofs)}), got {values.tolist()}")
+    return values
+
+
+def rollout(model_path: str | os.PathLike, out_csv: str | os.PathLike, periods: float = 10.0,
+            frequency_hz: float | None = None, rate_hz: float = 100.0,
+            amplitude_scale: float = 1.0, goal=None) -> tuple[np.ndarray, np.ndarray]:
+    """Integrate a model (eqs. 6-7) and write t and one column per DOF to a Trajectory CSV.
+
+    Parameters
+    ----------
+    model_path : path-like
+        model.json (``wipelab.periodic_dmp/1``).
+    out_csv : path-like
+        Output Trajectory CSV (written atomically).
+    periods : float
+        Length in periods of the rollout frequency.
+    frequency_hz : float, optional
+        Rollout frequency (default: the learned one).
+    rate_hz : float
+        Sample rate (Hz).
+    amplitude_scale : float
+        Factor on the amplitudes r.
+    goal : sequence of float, optional
+        New anchors g, one per DOF (m).
+
+    Returns
+    -------
+    t, y : ndarray, shapes (n,) and (n, d)
+    """
+    model = read_model(model_path)
+    for option, value in (("--periods", periods), ("--rate", rate_hz),
+                          ("--amplitude-scale", amplitude_scale)):
+        if not (math.isfinite(value) and value > 0):
+            raise InputError(f"{option}: must be a positive number, got {value}")
+    if frequency_hz is not None and not (math.isfinite(frequency_hz) and frequency_hz > 0):
+        raise InputError(f"--frequency: must be a positive number, got {frequency_hz}")
+    frequency_hz = model.frequency_hz if frequency_hz is None else frequency_hz
+    t, y = model.rollout(periods / frequency_hz, rate_hz, frequency_hz,
+                         amplitude=model.amplitude * amplitude_scale,
+                         goal=_per_dof("--goal", goal, model))
+    out_csv = Path(out_csv)
+    out_csv.parent.mkdir(parents=True, exist_ok=True)
+    write_trajectory(out_csv, t, {dof: y[:, j] for j, dof in enumerate(model.dofs)})
+    return t, y

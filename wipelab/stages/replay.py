@@ -1,0 +1,240 @@
+"""The replay stage: execute an (adapted) model at any speed on the simulated robot.
+
+For every frequency scale (``--frequency-scale 1 2 3``: multiples of the frequency the
+profile was learned at) it runs the same path in several modes, one after the other in the
+same world, so that the results sit side by side:
+
+- ``learned``: the learned z profile alone (no force feedback);
+- ``learned+compliance``: the learned profile with active compliance on top (eq. 10 with
+  Y_r the learned profile);
+- ``compliance``: baseline 1, active compliance alone from a planar reference above the
+  surface (what adapt does before it has learned anything);
+- ``planar``: baseline 2, the unadapted planar trajectory, at the mean learned height.
+
+Each run lowers the sponge onto its start, runs ``warmup_periods`` unscored periods and
+``periods`` scored ones; a safety stop ends the run (its missing time counts as no contact).
+A model without z (not adapted) can be replayed in the ``compliance`` mode only.
+
+Outputs: ``metrics.json`` (per scale and mode: force regulation, contact, peak, coverage),
+``replay.mcap``, ``replay.rrd``, ``manifest.json``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from wipelab.control.compliance import ComplianceParams
+from wipelab.errors import InputError
+from wipelab.learning.model import PeriodicModel
+from wipelab.logs import StageRecorder
+from wipelab.manifest import build_manifest, write_json
+from wipelab.sim.metrics import coverage, force_metrics
+from wipelab.sim.model_file import read_model
+from wipelab.sim.path import PathGenerator, dof_waveform, place_model, require_dofs
+from wipelab.sim.recording import Segment, log_run, wiping_blueprint
+from wipelab.sim.session import SafetyStop
+from wipelab.sim.sponge import SpongeParams
+from wipelab.sim.surfaces import load_surface
+from wipelab.sim.task import CALIBRATION_LIFT, TaskOptions, WipingTask, build_task
+from wipelab.sim.world import BasePose
+from wipelab.stage_output import staged_output
+from wipelab.stages.adapt import json_parameters
+
+#: Replay modes, in the order they run.
+MODES = ("learned", "learned+compliance", "compliance", "planar")
+#: Modes that need the learned z.
+_NEEDS_Z = ("learned", "learned+compliance", "planar")
+#: Slow-down assumed for a model that was not adapted (no learning frequency recorded).
+DEFAULT_SLOWDOWN = 4.0
+#: Trace label of the moves between runs.
+MOVE = 0
+
+
+@dataclass(frozen=True)
+class ReplayParams:
+    """Parameters of ``wipelab replay`` (CLI flags in brackets). ``None`` takes the value the
+    model was adapted with (its ``surface`` entry) or the adapt default."""
+
+    surface: str | None = None                 # [--surface]
+    frequency_scales: tuple[float, ...] = (1.0, 2.0, 3.0)  # [--frequency-scale] (repeatable)
+    modes: tuple[str, ...] = MODES             # [--mode] (repeatable)
+    periods: int = 3                           # [--periods] scored periods per run
+    warmup_periods: int = 1                    # [--warmup-periods] unscored, first
+    force: float | None = None                 # [--force] F_0 (N)
+    feedback: str | None = None                # [--feedback] fz or norm
+    center: tuple[float, float] | None = None  # [--center] only for a model without z
+    base: tuple[float, float, float] = (0.0, 0.0, 0.0)  # [--base]
+    sponge_stiffness: float = 1000.0           # [--sponge-stiffness] N/m
+    seed: int = 0                              # [--seed]
+
+    def validate(self) -> None:
+        if not self.frequency_scales or min(self.frequency_scales) <= 0:
+            raise InputError("--frequency-scale: give one or more positive scales")
+        if max(self.frequency_scales) > 6:
+            raise InputError("--frequency-scale: at most 6 times the learning frequency")
+        unknown = [m for m in self.modes if m not in MODES]
+        if unknown or not self.modes:
+            raise InputError(f"--mode: unknown {unknown}; choose from {', '.join(MODES)}")
+        if self.periods < 1 or self.warmup_periods < 0:
+            raise InputError("--periods must be >= 1 and --warmup-periods >= 0")
+
+
+@dataclass
+class RunResult:
+    """One (scale, mode) run."""
+
+    scale: float
+    mode: str
+    motion_start: float   # s: the movement started
+    start: float          # s: the scored window started (after the warm-up)
+    end: float            # s: the run ended (completed or stopped)
+    planned: float        # s: planned scored duration
+    stop_reason: str | None
+
+
+def _model_setting(model: PeriodicModel, key: str, default):
+    return (model.surface or {}).get(key, default)
+
+
+def _lower_onto(task: WipingTask, xy: np.ndarray, z: float, label: int) -> None:
+    session = task.session
+    session.move_to([*xy, task.start_height + 0.03], 0.8, mode=MOVE)
+    if z < task.start_height + 0.03:
+        session.move_to([*xy, z], 0.6, mode=label)
+
+
+def _run_one(task: WipingTask, model: PeriodicModel, omega: float, mode: str, label: int,
+             params: ReplayParams, z_plane: float, bar) -> RunResult:
+    session = task.session
+    dt = session.dt
+    has_z = "z" in model.dofs
+    path = PathGenerator(model, ("x", "y", "z") if has_z else ("x", "y"), phase=0.0)
+    start = path.position
+    learned = mode.startswith("learned")
+    compliance_on = mode in ("learned+compliance", "compliance")
+    reference = {"learned": None, "learned+compliance": None, "compliance": task.start_height,
+                 "planar": z_plane}[mode]
+    period = 2.0 * math.pi / omega
+    planned = params.periods * period
+    end_phase = 2.0 * math.pi * (params.warmup_periods + params.periods)
+    motion_start = score_from = math.inf
+    stop = None
+    try:
+        _lower_onto(task, start[:2], start[2] if learned else reference, label)
+        session.integrator.offset_ = 0.0
+        motion_start = session.time
+        score_from = motion_start + params.warmup_periods * period
+        while path.phase < end_phase:
+            position, acceleration = path.step(omega, dt)
+            z_ref = position[2] if learned else reference
+            acc = np.append(acceleration[:2], acceleration[2] if learned else 0.0)
+            session.tick(position[:2], z_ref, compliance_on, path.phase, acc, label)
+            bar.update()
+    except SafetyStop as error:
+        stop = str(error)
+        motion_start = min(motion_start, session.time)
+    end = session.time
+    session.integrator.offset_ = 0.0
+    if stop is None:
+        tcp = session.trace.columns["tcp_cmd"][-1]
+        session.move_to([tcp[0], tcp[1], task.start_height + 0.03], 0.5, mode=MOVE)
+    return RunResult(0.0, mode, motion_start, score_from, end, planned, stop)
+
+
+def _run_metrics(task: WipingTask, trace: dict, run: RunResult, target_force: float) -> dict:
+    """Metrics of the scored window; a run stopped during its warm-up is scored from the start
+    of its movement to the stop."""
+    start = run.start if run.end > run.start else run.motion_start
+    window = (trace["t"] > start) & (trace["t"] <= run.end)
+    if not window.any():
+        return {"safety_stop": run.stop_reason, "scored_time_s": 0.0, "contact_fraction": 0.0}
+    result = force_metrics(trace["force"][window], trace["sponge_force"][window], target_force)
+    scored = float(window.sum() * task.session.dt)
+    # a stopped run did not wipe for the rest of its planned time
+    result["contact_fraction"] *= min(1.0, scored / run.planned)
+    result.update(coverage(task.surface.height_at, trace["sponge_pos"][window],
+                           trace["sponge_quat"][window], trace["sponge_force"][window],
+                           task.options.sponge.size))
+    result["safety_stop"] = run.stop_reason
+    result["scored_time_s"] = scored
+    return result
+
+
+def run_replay(model_path: str | os.PathLike, out_dir: str | os.PathLike,
+               params: ReplayParams = ReplayParams(), quiet: bool = False) -> dict:
+    """Run the replay stage; returns the metrics (also written to ``metrics.json``)."""
+    params.validate()
+    model_path = Path(model_path)
+    model = read_model(model_path)
+    require_dofs(model, ("x", "y"), str(model_path))
+    has_z = "z" in model.dofs
+    modes = tuple(params.modes) if has_z else tuple(m for m in params.modes if m not in _NEEDS_Z)
+    if not modes:
+        raise InputError(f"{model_path}: the model has no learned z (run adapt first); "
+                         "only --mode compliance can replay it")
+    surface_spec = params.surface or _model_setting(model, "spec", "flat")
+    surface = load_surface(surface_spec)
+    force = params.force if params.force is not None else _model_setting(model, "target_force_n",
+                                                                           10.0)
+    feedback = params.feedback or _model_setting(model, "feedback", "norm")
+    try:
+        options = TaskOptions(base=BasePose(*params.base),
+                              sponge=SpongeParams(stiffness=params.sponge_stiffness),
+                              compliance=ComplianceParams(target_force=force, feedback=feedback),
+                              seed=params.seed)
+    except ValueError as error:
+        raise InputError(f"replay: {error}") from None
+    if not has_z:
+        centre = surface.wipe_center if params.center is None else np.asarray(params.center)
+        model = place_model(model, centre)
+    base_hz = _model_setting(model, "learning_frequency_hz", model.frequency_hz / DEFAULT_SLOWDOWN)
+    z_plane = float(np.mean(dof_waveform(model, ("z",)))) if has_z else math.nan
+    parameters = json_parameters(replace(params, modes=modes))
+    parameters.update(surface=surface_spec, force=force, feedback=feedback)
+    task = build_task(model, surface, options, str(model_path))
+    try:
+        session = task.session
+        start = dof_waveform(model, ("x", "y"), [0.0])[0]
+        session.move_to([*start, task.start_height + CALIBRATION_LIFT], 1.5, mode=MOVE)
+        session.calibrate()
+        segments = [Segment("approach", MOVE, 0.0)]
+        runs = []
+        steps = sum(int(math.ceil((params.periods + params.warmup_periods)
+                                  / (base_hz * s * session.dt)))
+                    for s in params.frequency_scales) * len(modes)
+        with tqdm(total=steps, desc="replay", unit="step", disable=quiet, leave=False) as bar:
+            for scale in params.frequency_scales:
+                for mode in modes:
+                    label = len(runs) + 1
+                    segments.append(Segment(f"{scale:g}x {mode}", label, session.time))
+                    run = _run_one(task, model, 2.0 * math.pi * base_hz * scale, mode, label,
+                                   params, z_plane, bar)
+                    runs.append(replace(run, scale=scale))
+        segments.append(Segment("end", MOVE, session.time))
+        trace = session.trace.arrays()
+        metrics = {"format": "wipelab.replay_metrics/1", "surface": surface.describe(),
+                   "base_frequency_hz": base_hz, "target_force_n": force, "feedback": feedback,
+                   "periods": params.periods, "scales": {}}
+        for run in runs:
+            metrics["scales"].setdefault(f"{run.scale:g}", {})[run.mode] = \
+                _run_metrics(task, trace, run, force)
+        metrics["sim_time_s"] = float(trace["t"][-1])
+        inputs = {"model": model_path}
+        if Path(surface_spec).suffix.lower() == ".toml":
+            inputs["surface"] = Path(surface_spec)
+        with staged_output(out_dir) as tmp:
+            write_json(tmp / "metrics.json", metrics)
+            with StageRecorder(tmp, "replay", parameters, inputs,
+                               wiping_blueprint("replay")) as rec:
+                log_run(rec, "replay", task, trace, segments, (), model)
+            write_json(tmp / "manifest.json",
+                       build_manifest("replay", inputs, parameters, params.seed))
+    finally:
+        task.close()
+    return metrics

@@ -1,0 +1,433 @@
+"""The sponge tracker: colour back-projection, a 3D particle filter, sub-millimetre pose
+refinement and occlusion handling, frame by frame on a calibrated stereo pair (paper,
+Sec. III-A2).
+
+Per frame:
+
+1. predict: every particle (x, y, z, yaw) moves with the sponge's motion extrapolated from
+   the last measured poses (constant acceleration, damped) plus random diffusion;
+2. weight: inside a window around the prediction, both frames are back-projected through
+   the colour histogram (:class:`~wipelab.vision.colour_model.ColourModel`); each
+   particle's box is projected into both images, lens distortion included, and scored by
+   its silhouette contrast and face coverage (:mod:`wipelab.vision.sponge_likelihood`);
+   ``w ~ exp(gain * score)``; the estimate is the weighted mean;
+3. refine: Newton ascent of the silhouette contrast of both images read from a *linear*
+   colour feature (:class:`~wipelab.vision.colour_model.LinearColourFeature`), whose blurred
+   edges stay centred on the true outline, gives the pose to a fraction of a millimetre
+   (:mod:`wipelab.vision.pose_refinement`);
+4. decide: the refined box must be seen (coverage) with a clear outline (contrast) in
+   *both* images; otherwise the frame is occluded: it is marked invalid, the particles
+   spread out, and a global colour-blob search in both images (triangulated) re-initialises
+   the filter as soon as the sponge shows again. Valid frames resample the particles.
+
+The reported point is the centre of the sponge box (not the visible blob's centroid): the
+same point as synth's truth.csv.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from wipelab.vision.calibration import StereoCalibration
+from wipelab.vision.colour_model import (ColourModel, ColourSource, LinearColourFeature,
+                                         largest_blob)
+from wipelab.vision.particle_filter import (align_yaw, normalised_weights,
+                                            systematic_resample, weighted_pose_mean,
+                                            wrap_half_turn)
+from wipelab.vision.pose_refinement import refine_pose
+from wipelab.vision.projection import invert_transform, transform_points
+from wipelab.vision.sponge_box import SpongeBox, yaw_rotation
+from wipelab.vision.sponge_likelihood import (DerivativeImage, SpongeTemplate, Undistorter,
+                                              ViewImage, ViewSamples, contrast_derivatives,
+                                              facing_camera, pinhole, score_view,
+                                              summed_contrast, view_samples)
+from wipelab.vision.stereo_geometry import reprojection_errors, triangulate_pixels
+
+
+@dataclass(frozen=True)
+class TrackerParams:
+    """Tracker settings.
+
+    Attributes
+    ----------
+    particles : int
+        Number of particles.
+    seed : int
+        Seed of the filter's random numbers.
+    sponge : SpongeBox
+        Sponge dimensions, metres.
+    position_noise : float
+        Per-frame random walk of a particle's position around the prediction, metres
+        (standard deviation per axis).
+    yaw_noise : float
+        Per-frame random walk of yaw, rad.
+    likelihood_gain : float
+        Log-likelihood per unit of score (sharpness of the weights).
+    search_offsets : tuple of float
+        Distances of the inside/outside samples from the outline when weighting particles,
+        metres.
+    refine_offsets : tuple of float
+        The same for the refinement (closer to the outline, so that the optimum is sharp).
+    refine_steps : tuple of float
+        Typical refinement step: x, y, z (metres), yaw (rad); Newton steps are limited to
+        four of them per iteration.
+    refine_iterations : int
+        Most Newton steps per frame.
+    blur_sigma : float
+        Gaussian blur of both score images, pixels (smooths the score below a pixel).
+    window_margin : int
+        Margin around the predicted sponge, pixels, of the window where frames are scored.
+    min_contrast : float
+        Silhouette contrast (back-projection) each camera needs for a valid frame.
+    min_coverage : float
+        Fraction of the faces turned to a camera that must look sponge-coloured in it.
+    search_scale : float
+        Image scale of the global search for the sponge (acquisition, after occlusions).
+    min_blob_area : int
+        Fewest pixels (full resolution) of a colour blob to count as the sponge.
+    max_blob_reprojection : float
+        Largest reprojection error of triangulated blob centres, pixels.
+    """
+
+    particles: int = 100
+    seed: int = 0
+    sponge: SpongeBox = field(default_factory=SpongeBox)
+    position_noise: float = 0.005
+    yaw_noise: float = 0.03
+    likelihood_gain: float = 30.0
+    search_offsets: tuple[float, ...] = (0.004, 0.008)
+    refine_offsets: tuple[float, ...] = (0.001, 0.002, 0.0035, 0.005)
+    refine_steps: tuple[float, float, float, float] = (0.001, 0.001, 0.001, 0.015)
+    refine_iterations: int = 8
+    blur_sigma: float = 0.7
+    window_margin: int = 24
+    min_contrast: float = 0.35
+    min_coverage: float = 0.30
+    search_scale: float = 0.25
+    min_blob_area: int = 150
+    max_blob_reprojection: float = 25.0
+
+    def __post_init__(self):
+        if self.particles < 10:
+            raise ValueError("particles must be at least 10")
+
+
+@dataclass(frozen=True)
+class FrameEstimate:
+    """The tracker's answer for one frame.
+
+    Attributes
+    ----------
+    pose : ndarray, shape (4,)
+        Sponge centre (x, y, z) in the tracking frame, metres, and yaw (rad); NaN when the
+        sponge has not been found yet or is lost.
+    valid : bool
+        The sponge was seen in both images and ``pose`` measured; False when occluded/lost.
+    contrast, coverage : ndarray, shape (2,)
+        Per camera (left, right) at ``pose``.
+    particles : ndarray, shape (n, 4)
+        The particle set after this frame.
+    """
+
+    pose: np.ndarray
+    valid: bool
+    contrast: np.ndarray
+    coverage: np.ndarray
+    particles: np.ndarray
+
+
+class _View:
+    """A camera as the tracker uses it: pose in the tracking frame, undistortion, size."""
+
+    def __init__(self, K: np.ndarray, D: np.ndarray, T_cam_track: np.ndarray,
+                 size: tuple[int, int]):
+        self.undistorter = Undistorter(K, D, size)
+        self.K = self.undistorter.K  # of the undistorted canvas
+        self.R, self.t = T_cam_track[:3, :3], T_cam_track[:3, 3]
+        self.T_cam_track = T_cam_track
+        self.eye = invert_transform(T_cam_track)[:3, 3]
+
+    def project(self, points_track: np.ndarray) -> np.ndarray:
+        """Undistorted-canvas pixels (..., 2) of points (..., 3) in the tracking frame."""
+        return pinhole(transform_points(self.T_cam_track, points_track), self.K)
+
+
+@dataclass
+class _Window:
+    """One camera's scoring window of one frame: back-projection and linear feature."""
+
+    probability: ViewImage
+    feature: ViewImage
+
+
+class SpongeTracker:
+    """Track a coloured sponge box in 3D through a calibrated stereo video.
+
+    Parameters
+    ----------
+    calibration : StereoCalibration
+        Poses are reported in ``calibration.track_frame`` (world if it has T_world_left).
+    colour : ColourSource
+        How to learn the sponge's colour (on the first frame pair where it is found).
+    params : TrackerParams
+    """
+
+    def __init__(self, calibration: StereoCalibration, colour: ColourSource,
+                 params: TrackerParams = TrackerParams()):
+        self.calibration = calibration
+        self.colour = colour
+        self.params = params
+        self.coarse = SpongeTemplate.build(params.sponge, edge_spacing=0.02, face_spacing=0.025)
+        self.fine = SpongeTemplate.build(params.sponge, edge_spacing=0.01, face_spacing=0.016)
+        T_left_track = invert_transform(calibration.T_track_left)
+        size = calibration.image_size
+        self.views = (_View(calibration.K1, calibration.D1, T_left_track, size),
+                      _View(calibration.K2, calibration.D2,
+                            calibration.right.T_cam_ref @ T_left_track, size))
+        # Orientation of the table (z = up) in the tracking frame; the world's z is up.
+        self.R_track_table = np.eye(3) if calibration.T_world_left is not None else None
+        self.model: ColourModel | None = None
+        self.feature: LinearColourFeature | None = None
+        self.rng = np.random.default_rng(params.seed)
+        self.particles: np.ndarray | None = None
+        self.history: deque[np.ndarray] = deque(maxlen=3)  # last valid poses, newest first
+        self.blob_offset: np.ndarray | None = None  # sponge centre minus colour-blob centre
+
+    # ------------------------------------------------------------------ public
+    def step(self, left: np.ndarray, right: np.ndarray) -> FrameEstimate:
+        """Process the next synchronised frame pair (BGR uint8, one frame period later)."""
+        frames = (left, right)
+        if self.model is None and not self._learn_colour(frames):
+            return self._invalid()
+        if not self.history:  # never found, or lost: look for the sponge everywhere
+            if not self._search(frames):
+                if self.particles is not None:
+                    self._diffuse(2.0)
+                return self._invalid()
+        else:
+            self._predict()
+        return self._measure(frames)
+
+    # ------------------------------------------------------------- acquisition
+    def _learn_colour(self, frames) -> bool:
+        """Fit the colour models from the seed (name, HSV range or region); False if the
+        sponge's colour is not found in both frames."""
+        p = self.params
+        colour_range = self.colour.hsv_range
+        if colour_range is not None:
+            masks = [largest_blob(colour_range.mask(cv2.cvtColor(f, cv2.COLOR_BGR2HSV)),
+                                  p.min_blob_area) for f in frames]
+            if any(mask is None for mask in masks):
+                return False
+        else:
+            x, y, w, h = self.colour.roi
+            roi = np.zeros(frames[0].shape[:2], np.uint8)
+            roi[y:y + h, x:x + w] = 255
+            model = ColourModel.fit([frames[0]], [roi])
+            masks = [largest_blob(cv2.bitwise_and(roi, _mask(model.back_project(frames[0]))),
+                                  p.min_blob_area),
+                     largest_blob(_mask(model.back_project(frames[1])), p.min_blob_area)]
+            if any(mask is None for mask in masks):
+                return False
+        self.model = ColourModel.fit(list(frames), masks)
+        self.feature = LinearColourFeature.fit(list(frames), masks)
+        return True
+
+    def _blob_centres(self, frames) -> list[np.ndarray] | None:
+        """Centroid (pixels, full resolution) of the largest sponge-coloured blob per image."""
+        p = self.params
+        centres = []
+        for frame in frames:
+            small = cv2.resize(frame, None, fx=p.search_scale, fy=p.search_scale,
+                               interpolation=cv2.INTER_AREA)
+            blob = largest_blob(_mask(self.model.back_project(small)),
+                                max(4, int(p.min_blob_area * p.search_scale ** 2)))
+            if blob is None:
+                return None
+            m = cv2.moments(blob, binaryImage=True)
+            centre = np.array([m["m10"], m["m01"]]) / m["m00"]
+            centres.append((centre + 0.5) / p.search_scale - 0.5)
+        return centres
+
+    def _search(self, frames) -> bool:
+        """Find the sponge anywhere in both images and spread fresh particles around it."""
+        p = self.params
+        centres = self._blob_centres(frames)
+        if centres is None:
+            return False
+        point_left = triangulate_pixels(self.calibration, centres[0][None], centres[1][None])
+        error = reprojection_errors(self.calibration, point_left, centres[0][None],
+                                    centres[1][None])[0]
+        if not (0.05 < point_left[0, 2] < 10.0) or error > p.max_blob_reprojection:
+            return False
+        guess = transform_points(self.calibration.T_track_left, point_left[0])
+        if self.R_track_table is None:
+            self.R_track_table = self._estimate_table_rotation(frames, guess)
+        self.particles = self._spread(guess, 4 * p.particles)
+        return True
+
+    def _spread(self, centre: np.ndarray, n: int) -> np.ndarray:
+        """n particles around a position, any yaw."""
+        particles = np.empty((n, 4))
+        particles[:, :3] = centre + self.rng.normal(size=(n, 3)) * 0.015
+        particles[:, 3] = self.rng.uniform(-0.5 * np.pi, 0.5 * np.pi, n)
+        return particles
+
+    def _estimate_table_rotation(self, frames, guess: np.ndarray) -> np.ndarray:
+        """Without a world frame: choose the table orientation (tilt of its normal relative
+        to the left camera) under which sponge boxes near ``guess`` score best."""
+        best, best_score = None, -np.inf
+        poses = self._spread(guess, 2 * self.params.particles)
+        for pitch in np.deg2rad(np.arange(0, 91, 10)):
+            for roll in np.deg2rad(np.arange(-30, 31, 10)):
+                # the table normal: the camera's up (-y) tilted towards its optical axis
+                up = (cv2.Rodrigues(np.array([0.0, 0.0, roll]))[0]
+                      @ cv2.Rodrigues(np.array([-pitch, 0.0, 0.0]))[0] @ [0.0, -1.0, 0.0])
+                forward = np.cross([1.0, 0.0, 0.0], up)
+                forward /= np.linalg.norm(forward)
+                self.R_track_table = self.calibration.T_track_left[:3, :3] @ np.column_stack(
+                    [np.cross(forward, up), forward, up])
+                windows = self._windows(frames, poses)
+                score = self._score(poses, windows).max()
+                if score > best_score:
+                    best, best_score = self.R_track_table, score
+        return best
+
+    # ---------------------------------------------------------------- tracking
+    def _predict(self) -> None:
+        """Move the particles with the extrapolated motion of the last valid poses."""
+        h = self.history
+        motion = np.zeros(3)
+        if len(h) >= 2:
+            velocity = h[0][:3] - h[1][:3]
+            acceleration = (velocity - (h[1][:3] - h[2][:3])) if len(h) == 3 else 0.0
+            motion = velocity + 0.5 * acceleration
+        self.particles[:, :3] += motion
+        self._diffuse(1.0)
+
+    def _diffuse(self, scale: float) -> None:
+        p = self.params
+        n = len(self.particles)
+        self.particles[:, :3] += self.rng.normal(size=(n, 3)) * (scale * p.position_noise)
+        self.particles[:, 3] += self.rng.normal(size=n) * p.yaw_noise
+
+    def _samples(self, template: SpongeTemplate, pose: np.ndarray, offsets
+                 ) -> list[ViewSamples]:
+        """Per-camera sample sets for boxes near ``pose`` (visibility decided at ``pose``)."""
+        R_track_sponge = self.R_track_table @ yaw_rotation(pose[3])
+        sets = []
+        for view in self.views:
+            faces, edges = facing_camera(R_track_sponge, pose[:3], view.eye, self.params.sponge)
+            sets.append(view_samples(template, view.R @ self.R_track_table, faces, edges,
+                                     offsets))
+        return sets
+
+    def _windows(self, frames, poses: np.ndarray) -> list[_Window]:
+        """Score images of each camera inside a window around the boxes of ``poses``."""
+        p = self.params
+        lo, hi = poses[:, :3].min(axis=0), poses[:, :3].max(axis=0)
+        extent = np.linalg.norm(p.sponge.half_extents)
+        corners = np.array([[x, y, z] for x in (lo[0] - extent, hi[0] + extent)
+                            for y in (lo[1] - extent, hi[1] + extent)
+                            for z in (lo[2] - extent, hi[2] + extent)])
+        windows = []
+        for view, frame in zip(self.views, frames):
+            pixels = view.project(corners)
+            width, height = view.undistorter.size
+            if np.all(np.isfinite(pixels)):
+                x0, y0 = np.floor(pixels.min(axis=0)).astype(int) - p.window_margin
+                x1, y1 = np.ceil(pixels.max(axis=0)).astype(int) + p.window_margin
+                x0, y0 = int(np.clip(x0, 0, width - 1)), int(np.clip(y0, 0, height - 1))
+                x1, y1 = int(np.clip(x1, x0 + 1, width)), int(np.clip(y1, y0 + 1, height))
+            else:
+                x0, y0, x1, y1 = 0, 0, width, height
+            crop = view.undistorter.window(frame, x0, y0, x1, y1)
+            images = []
+            for values in (self.model.back_project(crop), self.feature.apply(crop)):
+                if p.blur_sigma > 0:
+                    values = cv2.GaussianBlur(values, (0, 0), p.blur_sigma)
+                images.append(ViewImage(values, (float(x0), float(y0)), view.K, view.R, view.t))
+            windows.append(_Window(*images))
+        return windows
+
+    def _window_blob(self, windows: list[_Window]) -> np.ndarray | None:
+        """Triangulated centre (tracking frame) of the sponge-coloured pixels of both windows,
+        or None when a window shows too few of them."""
+        centres = []
+        for window, view in zip(windows, self.views):
+            m = cv2.moments(_mask(window.probability.probability), binaryImage=True)
+            if m["m00"] < self.params.min_blob_area:
+                return None
+            centre = np.array([m["m10"], m["m01"]]) / m["m00"] + window.probability.origin
+            centres.append(view.undistorter.distorted(centre[None])[0])
+        point_left = triangulate_pixels(self.calibration, centres[0][None], centres[1][None])
+        if not 0.05 < point_left[0, 2] < 10.0:
+            return None
+        return transform_points(self.calibration.T_track_left, point_left[0])
+
+    def _score(self, poses: np.ndarray, windows: list[_Window]) -> np.ndarray:
+        """Particle score on the back-projection: both cameras' contrast plus half their
+        coverage."""
+        reference = weighted_pose_mean(poses, np.full(len(poses), 1.0 / len(poses)))
+        poses = align_yaw(poses, reference[3])
+        total = np.zeros(len(poses))
+        samples = self._samples(self.coarse, reference, self.params.search_offsets)
+        for view_samples_, window in zip(samples, windows):
+            contrast, coverage = score_view(poses, view_samples_, window.probability)
+            total += contrast + 0.5 * coverage
+        return total
+
+    def _measure(self, frames) -> FrameEstimate:
+        p = self.params
+        windows = self._windows(frames, self.particles)
+        blob = self._window_blob(windows)
+        if blob is not None and self.blob_offset is not None and len(self.particles) <= p.particles:
+            # half of the particles follow the colour blob instead of the motion model: they
+            # catch the sponge when it turns faster than the extrapolation expects
+            half = len(self.particles) // 2
+            self.particles[half:, :3] = (blob + self.blob_offset
+                                         + self.rng.normal(size=(len(self.particles) - half, 3))
+                                         * p.position_noise)
+        scores = self._score(self.particles, windows)
+        weights = normalised_weights(p.likelihood_gain * scores)
+        best = self.particles[int(np.argmax(scores))]
+        near_best = np.linalg.norm(self.particles[:, :3] - best[:3], axis=1) < 0.01
+        estimate = weighted_pose_mean(align_yaw(self.particles[near_best], best[3]),
+                                      weights[near_best] / weights[near_best].sum())
+        views = list(zip(self._samples(self.fine, estimate, p.refine_offsets),
+                         [DerivativeImage.of(window.feature) for window in windows]))
+        steps = np.array(p.refine_steps)
+        pose, _ = refine_pose(lambda pose: contrast_derivatives(pose, views),
+                              lambda poses: summed_contrast(poses, views), estimate, steps,
+                              iterations=p.refine_iterations)
+        pose[3] = wrap_half_turn(pose[3])
+        quality = [score_view(pose[None], samples, window.probability) for samples, window in
+                   zip(self._samples(self.fine, pose, p.refine_offsets), windows)]
+        contrast = np.array([q[0][0] for q in quality])
+        coverage = np.array([q[1][0] for q in quality])
+        valid = bool(np.all(contrast >= p.min_contrast) and np.all(coverage >= p.min_coverage))
+        if valid:
+            keep = systematic_resample(weights, self.rng)
+            self.particles = self.particles[keep[np.linspace(0, len(keep) - 1, p.particles)
+                                                 .astype(int)]]
+            self.history.appendleft(pose.copy())
+            self.blob_offset = None if blob is None else pose[:3] - blob
+        else:
+            self.particles = self.particles[self.rng.choice(len(self.particles), p.particles,
+                                                            replace=False)]
+            self.history.clear()
+            pose = np.full(4, np.nan)
+        return FrameEstimate(pose, valid, contrast, coverage, self.particles.copy())
+
+    def _invalid(self) -> FrameEstimate:
+        particles = self.particles.copy() if self.particles is not None else np.zeros((0, 4))
+        return FrameEstimate(np.full(4, np.nan), False, np.zeros(2), np.zeros(2), particles)
+
+
+def _mask(probability: np.ndarray) -> np.ndarray:
+    """Pixels more likely sponge than not, uint8 0/255."""
+    return (probability > 0.5).astype(np.uint8) * 255

@@ -1,0 +1,177 @@
+"""Video files: read a synchronised stereo pair with OpenCV, write H.264 with PyAV.
+
+H.264 without B-frames (``bf=0``) is what the Rerun viewer plays from an ``AssetVideo``;
+libx264 output is deterministic, so the same frames give the same bytes.
+"""
+
+from __future__ import annotations
+
+import os
+import queue
+import threading
+from collections.abc import Iterator
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+
+import av
+import cv2
+import numpy as np
+
+from wipelab.errors import InputError
+
+
+@dataclass(frozen=True)
+class VideoInfo:
+    """What a video file holds, as OpenCV reports it."""
+
+    path: str
+    frame_count: int
+    fps: float
+    width: int
+    height: int
+
+
+def probe_video(path: str | os.PathLike) -> VideoInfo:
+    """Open a video with OpenCV and read its header and first frame.
+
+    Raises
+    ------
+    InputError
+        Missing file, a file OpenCV cannot decode, no frames, or no frame rate.
+    """
+    name = str(path)
+    if not Path(path).is_file():
+        raise InputError(f"{name}: file not found")
+    capture = cv2.VideoCapture(name, cv2.CAP_FFMPEG)
+    try:
+        if not capture.isOpened():
+            raise InputError(f"{name}: cannot be decoded by OpenCV (not a video file?)")
+        ok, frame = capture.read()
+        if not ok or frame is None:
+            raise InputError(f"{name}: no decodable frame")
+        count = int(round(capture.get(cv2.CAP_PROP_FRAME_COUNT)))
+        fps = float(capture.get(cv2.CAP_PROP_FPS))
+    finally:
+        capture.release()
+    if count <= 0:
+        raise InputError(f"{name}: the container does not tell its frame count")
+    if not np.isfinite(fps) or fps <= 0:
+        raise InputError(f"{name}: the container does not tell its frame rate")
+    return VideoInfo(name, count, fps, frame.shape[1], frame.shape[0])
+
+
+def _decode(path: str, out: queue.Queue, stop: threading.Event) -> None:
+    capture = cv2.VideoCapture(path, cv2.CAP_FFMPEG)
+    try:
+        while not stop.is_set():
+            ok, frame = capture.read()
+            out.put(frame if ok else None)
+            if not ok:
+                return
+    finally:
+        capture.release()
+
+
+class StereoVideoReader:
+    """Decode a left/right pair frame by frame, each file on its own thread.
+
+    Checks up front that both files open, hold the same number of frames at the same frame
+    rate and image size (``expected_size`` when given, e.g. the calibration's); while
+    iterating, a file that ends early (truncated) raises InputError.
+
+    Parameters
+    ----------
+    left, right : path-like
+    expected_size : tuple of int or None
+        (width, height) both videos must have.
+    """
+
+    def __init__(self, left: str | os.PathLike, right: str | os.PathLike,
+                 expected_size: tuple[int, int] | None = None, prefetch: int = 8):
+        self.left = probe_video(left)
+        self.right = probe_video(right)
+        if self.left.frame_count != self.right.frame_count:
+            raise InputError(f"{self.right.path}: {self.right.frame_count} frames but "
+                             f"{self.left.path} has {self.left.frame_count}")
+        if abs(self.left.fps - self.right.fps) > 1e-3 * self.left.fps:
+            raise InputError(f"{self.right.path}: {self.right.fps:g} fps but "
+                             f"{self.left.path} has {self.left.fps:g} fps")
+        for info in (self.left, self.right):
+            if expected_size is not None and (info.width, info.height) != tuple(expected_size):
+                raise InputError(f"{info.path}: frames are {info.width}x{info.height}, the "
+                                 f"calibration is for {expected_size[0]}x{expected_size[1]}")
+        self.prefetch = prefetch
+
+    @property
+    def frame_count(self) -> int:
+        return self.left.frame_count
+
+    @property
+    def fps(self) -> float:
+        return self.left.fps
+
+    def __iter__(self) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+        """Yield (left, right) BGR uint8 frames, shape (h, w, 3) each."""
+        stop = threading.Event()
+        queues = [queue.Queue(self.prefetch), queue.Queue(self.prefetch)]
+        threads = [threading.Thread(target=_decode, args=(info.path, q, stop), daemon=True)
+                   for info, q in zip((self.left, self.right), queues)]
+        for thread in threads:
+            thread.start()
+        try:
+            for index in range(self.frame_count):
+                frames = [q.get() for q in queues]
+                for frame, info in zip(frames, (self.left, self.right)):
+                    if frame is None:
+                        raise InputError(f"{info.path}: truncated, decoding stopped at frame "
+                                         f"{index} of {info.frame_count}")
+                yield frames[0], frames[1]
+        finally:
+            stop.set()
+            for q in queues:  # unblock the decoders so that they can see the stop flag
+                while not q.empty():
+                    q.get_nowait()
+            for thread in threads:
+                thread.join(timeout=5.0)
+
+
+class H264Writer:
+    """Encode BGR frames to an H.264 MP4 (yuv420p, no B-frames) with PyAV.
+
+    Parameters
+    ----------
+    path : path-like
+    fps : int
+    size : tuple of int
+        (width, height); both even.
+    crf : int
+        x264 constant rate factor (lower: better quality, bigger file).
+    preset : str
+        x264 speed preset.
+    """
+
+    def __init__(self, path: str | os.PathLike, fps: int, size: tuple[int, int], crf: int = 18,
+                 preset: str = "veryfast"):
+        self._container = av.open(str(path), mode="w")
+        stream = self._container.add_stream("libx264", rate=Fraction(fps))
+        stream.width, stream.height = size
+        stream.pix_fmt = "yuv420p"
+        stream.options = {"crf": str(crf), "preset": preset, "bf": "0"}
+        self._stream = stream
+
+    def write(self, frame_bgr: np.ndarray) -> None:
+        """Append one frame, shape (h, w, 3) uint8."""
+        frame = av.VideoFrame.from_ndarray(frame_bgr, format="bgr24")
+        self._container.mux(self._stream.encode(frame))
+
+    def close(self) -> None:
+        """Flush the encoder and finish the file."""
+        self._container.mux(self._stream.encode(None))
+        self._container.close()
+
+    def __enter__(self) -> "H264Writer":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
