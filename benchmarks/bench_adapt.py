@@ -5,8 +5,7 @@ beside two baselines; simulation speed.
 
 1. A movement model is learned from a synthetic demonstration (a circular wipe of 10 cm radius
    at 1 Hz, tracked at 30 Hz with 2 mm noise, somewhere in a camera's world frame) with
-   ``wipelab learn --mode offline`` when that command exists, otherwise with the learn stage's
-   offline learner directly.
+   ``wipelab learn --mode offline``.
 2. ``wipelab adapt`` on each surface (defaults: F0 = 10 N, |F| feedback, Omega / 4, the
    unknown grasp of the simulator): periods to convergence, learned height against the true
    contact height (sponge compression at F0 accounted for), force, contact, coverage.
@@ -53,7 +52,7 @@ def table(header: list[str], rows: list[list]) -> str:
     return "\n".join([line(header), line(["-" * w for w in widths]), *map(line, rows)])
 
 
-def demonstration(path: Path) -> tuple[np.ndarray, np.ndarray]:
+def demonstration(path: Path) -> None:
     rng = np.random.default_rng(0)
     t = np.arange(0.0, 10.0, 1 / 30)
     phase = 2 * np.pi * 1.0 * t
@@ -61,23 +60,14 @@ def demonstration(path: Path) -> tuple[np.ndarray, np.ndarray]:
     xy += rng.normal(scale=0.002, size=xy.shape)
     rows = "\n".join(f"{a:.4f},{b:.5f},{c:.5f}" for a, (b, c) in zip(t, xy))
     path.write_text("t,x,y\n" + rows + "\n")
-    return t, xy
 
 
-def learn_model(work: Path) -> tuple[Path, str]:
+def learn_model(work: Path) -> Path:
+    """The learn stage's model of the synthetic demonstration (``wipelab learn``)."""
     csv = work / "demo.csv"
-    t, xy = demonstration(csv)
-    from wipelab.cli import COMMAND_MODULES
-    try:
-        __import__(COMMAND_MODULES["learn"])
-        wipelab("learn", str(csv), "-o", str(work / "learn"), "--mode", "offline")
-        return work / "learn" / "model.json", "wipelab learn --mode offline"
-    except ImportError:
-        from wipelab.learning.offline import learn_offline
-        model, _ = learn_offline(t, xy, dofs=("x", "y"))
-        path = work / "model.json"
-        path.write_text(json.dumps(model.to_dict()))
-        return path, "wipelab.learning.offline.learn_offline (no learn command yet)"
+    demonstration(csv)
+    wipelab("learn", str(csv), "-o", str(work / "learn"), "--mode", "offline")
+    return work / "learn" / "model.json"
 
 
 def loop_speed(model_path: Path, seconds: float = 30.0) -> float:
@@ -117,8 +107,7 @@ def main() -> None:
     args = parser.parse_args()
     work = args.keep or Path(tempfile.mkdtemp(prefix="bench_adapt-"))
     work.mkdir(parents=True, exist_ok=True)
-    model_path, how = learn_model(work)
-    print(f"model: {how}\n")
+    model_path = learn_model(work)
 
     learning_rows, replay_rows, speed_rows = [], [], []
     for surface in args.surfaces:

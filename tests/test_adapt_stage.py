@@ -9,7 +9,7 @@ from click.testing import CliRunner
 from mcap.reader import make_reader
 
 from wipelab.cli import cli
-from wipelab.learning.model import PeriodicModel
+from wipelab.learning import PeriodicModel
 from wipelab.stages.adapt import AdaptParams, run_adapt
 from wipelab.stages.replay import ReplayParams, run_replay
 

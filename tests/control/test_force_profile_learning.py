@@ -7,7 +7,7 @@ import pytest
 
 from wipelab.control import (COMPARISON_PHASES, ConvergenceMonitor, ForceProfileLearner,
                              ProfileLearningParams)
-from wipelab.learning.kernels import default_width
+from wipelab.learning import default_width
 
 
 def height(phase):

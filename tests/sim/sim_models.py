@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from wipelab.learning.offline import learn_offline
+from wipelab.learning import learn_offline
 
 
 def circle_model(frequency_hz: float = 1.0, radius: float = 0.1, seed: int = 0):

@@ -19,11 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wipelab.learning.dmp import forcing_target
-from wipelab.learning.kernels import kernel_activations
-from wipelab.learning.lwr import IncrementalLWR
+from wipelab.learning import IncrementalLWR, forcing_target, kernel_activations, limit_cycle
 from wipelab.learning.derivatives import CentredDerivatives
-from wipelab.learning.limit_cycle import limit_cycle
 
 #: Phases at which learned waveforms are compared (rad).
 COMPARISON_PHASES = np.linspace(0.0, 2.0 * math.pi, 128, endpoint=False)

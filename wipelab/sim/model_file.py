@@ -7,7 +7,7 @@ import os
 from pathlib import Path
 
 from wipelab.errors import InputError
-from wipelab.learning.model import PeriodicModel
+from wipelab.learning import PeriodicModel
 
 
 def read_model(path: str | os.PathLike) -> PeriodicModel:

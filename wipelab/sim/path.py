@@ -16,8 +16,7 @@ from dataclasses import replace
 import numpy as np
 
 from wipelab.errors import InputError
-from wipelab.learning.limit_cycle import limit_cycle
-from wipelab.learning.model import PeriodicModel
+from wipelab.learning import PeriodicModel, limit_cycle
 
 #: Phases (rad) on which a model's path is sampled for placement and checks.
 PATH_PHASES = np.linspace(0.0, 2.0 * math.pi, 256, endpoint=False)

@@ -31,7 +31,7 @@ import rerun.blueprint as rrb
 from rerun.urdf import UrdfTree
 
 from wipelab.control.force_profile import COMPARISON_PHASES
-from wipelab.learning.model import PeriodicModel
+from wipelab.learning import PeriodicModel
 from wipelab.logs import StageRecorder
 from wipelab.sim.armar3 import RIGHT_ARM_JOINTS, TORSO_JOINTS, armar3b_urdf_path
 from wipelab.sim.kinematics import parse_urdf_joints, quaternion_xyzw_from_rotation

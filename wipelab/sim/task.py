@@ -16,7 +16,7 @@ import numpy as np
 
 from wipelab.control.compliance import ComplianceParams
 from wipelab.errors import InputError
-from wipelab.learning.model import PeriodicModel
+from wipelab.learning import PeriodicModel
 from wipelab.sim.arm import RightArm, TaskPosture
 from wipelab.sim.ft_sensor import FTSensorParams
 from wipelab.sim.ik import IKParams

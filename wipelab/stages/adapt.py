@@ -33,7 +33,7 @@ from wipelab.control.compliance import ComplianceParams
 from wipelab.control.force_profile import (COMPARISON_PHASES, ConvergenceMonitor,
                                            ForceProfileLearner, ProfileLearningParams)
 from wipelab.errors import InputError
-from wipelab.learning.model import PeriodicModel
+from wipelab.learning import PeriodicModel
 from wipelab.logs import StageRecorder
 from wipelab.manifest import build_manifest, sha256_file, write_json
 from wipelab.sim.metrics import coverage, force_metrics, profile_error

@@ -31,7 +31,7 @@ from tqdm import tqdm
 
 from wipelab.control.compliance import ComplianceParams
 from wipelab.errors import InputError
-from wipelab.learning.model import PeriodicModel
+from wipelab.learning import PeriodicModel
 from wipelab.logs import StageRecorder
 from wipelab.manifest import build_manifest, write_json
 from wipelab.sim.metrics import coverage, force_metrics
