@@ -40,7 +40,8 @@ def _numbers(option: str, text: str | None) -> list[float] | None:
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar, no summary.")
 def learn(trajectory: Path, out_dir: Path, mode: str, dofs: str, kernels: int,
           width: float | None, canonical: str, seed: int, quiet: bool) -> None:
-    """Learn a periodic movement (frequency + periodic DMP) from TRAJECTORY (a Trajectory CSV).
+    """Learn a periodic movement (frequency + periodic DMP) from TRAJECTORY (a Trajectory CSV
+    or a track.mcap).
 
     Refuses (exit code 2) a file it cannot use or a movement that is not periodic.
     """
@@ -73,8 +74,10 @@ def rollout(model: Path, out_csv: Path, periods: float, frequency_hz: float | No
     """Integrate MODEL (model.json) into a trajectory at any frequency, amplitude and anchor."""
     from wipelab.stages.learn import rollout as rollout_stage
 
-    rollout_stage(model, out_csv, periods=periods, frequency_hz=frequency_hz, rate_hz=rate_hz,
-                  amplitude_scale=amplitude_scale, goal=_numbers("--goal", goal))
+    t, _ = rollout_stage(model, out_csv, periods=periods, frequency_hz=frequency_hz,
+                         rate_hz=rate_hz, amplitude_scale=amplitude_scale,
+                         goal=_numbers("--goal", goal))
+    click.echo(f"{t.size} samples at {rate_hz:g} Hz ({t[-1]:.2f} s) -> {out_csv}")
 
 
 COMMANDS = [learn, rollout]

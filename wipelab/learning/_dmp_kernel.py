@@ -29,9 +29,10 @@ def dmp_step(y, s, goal, amplitude, weights, width, centres, alpha_s, beta_s, ph
     phase_step = omega * dt
     n_sub = max(1, int(math.ceil(abs(phase_step) / max_phase_step)))
     h = phase_step / n_sub
+    forcing(phase, weights, width, centres, f1)
     for j in range(n_sub):
         start = phase + h * j
-        forcing(start, weights, width, centres, f0)
+        f0[:] = f1                                   # the previous substep's end
         forcing(start + 0.5 * h, weights, width, centres, f_mid)
         forcing(start + h, weights, width, centres, f1)
         for d in range(y.shape[0]):

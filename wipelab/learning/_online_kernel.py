@@ -28,7 +28,7 @@ F_K, F_KW, F_NU, F_SCALE, F_MIN_OMEGA, F_MAX_OMEGA, F_ZERO_OMEGA, F_DWELL, F_NOR
     F_NORM_OFFSET, F_ALPHA, F_BETA, F_LAMBDA, F_WIDTH, F_WINDOW_PERIODS, F_FLOOR_OMEGA, \
     F_MAX_PHASE_STEP, F_STAT_PERIODS, F_FORGET_SAMPLES = range(19)
 # Indices into the integer parameter vector.
-I_KIND, I_REFERENCE, I_SUM, I_NSUB, I_MAX_WINDOW, I_CAPACITY, I_EVERY = range(7)
+I_KIND, I_REFERENCE, I_MEAN, I_NSUB, I_MAX_WINDOW, I_CAPACITY, I_EVERY = range(7)
 # Indices into the scalar state vector.
 S_COUNT, S_PREV_PHASE, S_PREV_OMEGA, S_OMEGA, S_ZERO_TIME, S_RESETS, S_STATS_COUNT, \
     S_DERIV_COUNT = range(8)
@@ -53,8 +53,12 @@ def _fundamental(kind, phases, omegas):
 
 
 @njit(cache=True)
-def _canonical_substep(kind, fp, ip, u, h, dt, phases, omegas, alpha, beta, error, drive):
-    """One Euler substep of the AFS (alpha, beta: (d, M + 1)) or AFO pool (alpha, beta: (d, 3))."""
+def _canonical_substep(kind, fp, ip, u, h, dt, phases, omegas, alpha, beta, error, drive,
+                       cosines, sines):
+    """One Euler substep of the AFS (alpha, beta: (d, M + 1)) or AFO pool (alpha, beta: (d, 3)).
+
+    cosines, sines: scratch arrays of length M + 1 (or 3).
+    """
     n_dofs = u.shape[0]
     n_coef = alpha.shape[1]
     reference = ip[I_REFERENCE]
@@ -68,28 +72,40 @@ def _canonical_substep(kind, fp, ip, u, h, dt, phases, omegas, alpha, beta, erro
         n_terms = 0
         while n_terms < n_coef and n_terms * omegas[0] * dt < math.pi:
             n_terms += 1
+    if kind == AFS:
+        # cos(c phi), sin(c phi) by the angle-addition recurrence: two trig calls, not 2 M.
+        cos_phi, sin_phi = math.cos(phases[0]), math.sin(phases[0])
+        cosines[0], sines[0] = 1.0, 0.0
+        for c in range(1, n_terms):
+            cosines[c] = cosines[c - 1] * cos_phi - sines[c - 1] * sin_phi
+            sines[c] = sines[c - 1] * cos_phi + cosines[c - 1] * sin_phi
+    else:
+        for c in range(n_terms):
+            cosines[c] = math.cos(phases[c])
+            sines[c] = math.sin(phases[c])
     for d in range(n_dofs):
         prediction = 0.0
         for c in range(n_terms):
-            angle = c * phases[0] if kind == AFS else phases[c]
-            prediction += alpha[d, c] * math.cos(angle) + beta[d, c] * math.sin(angle)
+            prediction += alpha[d, c] * cosines[c] + beta[d, c] * sines[c]
         error[d] = u[d] - prediction
     for i in range(n_osc):
         column = 1 if kind == AFS else i
         sin_phi, cos_phi = math.sin(phases[i]), math.cos(phases[i])
         total = error[reference] * sin_phi
-        if ip[I_SUM] == 1:
+        weight = 1.0
+        if ip[I_MEAN] == 1:
             for d in range(n_dofs):
                 if d != reference:
                     a, b = alpha[d, column], beta[d, column]
-                    total += error[d] * (a * sin_phi - b * cos_phi) / (math.hypot(a, b) + R_FADE)
-        drive[i] = total
+                    amplitude = math.hypot(a, b)
+                    total += error[d] * (a * sin_phi - b * cos_phi) / (amplitude + R_FADE)
+                    weight += amplitude / (amplitude + R_FADE)
+        drive[i] = total / weight
     rate = h * fp[F_NU] * m
     for d in range(n_dofs):
         for c in range(n_terms):
-            angle = c * phases[0] if kind == AFS else phases[c]
-            alpha[d, c] += rate * error[d] * math.cos(angle)
-            beta[d, c] += rate * error[d] * math.sin(angle)
+            alpha[d, c] += rate * error[d] * cosines[c]
+            beta[d, c] += rate * error[d] * sines[c]
     if kind == AFS:
         beta[reference, 1] = 0.0
     else:
@@ -132,6 +148,8 @@ def _run(Y, offset, dt, fp, ip, scalars, previous_u, norm_high, norm_low, norm_s
     uj = np.empty(n_dofs)
     error = np.empty(n_dofs)
     drive = np.empty(phases.shape[0])
+    cosines = np.empty(alpha.shape[1])
+    sines = np.empty(alpha.shape[1])
     extended = np.empty(n_dofs + 1)
     last_sum = np.empty(n_dofs + 1)
     last_square = np.empty(n_dofs + 1)
@@ -172,7 +190,8 @@ def _run(Y, offset, dt, fp, ip, scalars, previous_u, norm_high, norm_low, norm_s
         for j in range(1, n_sub + 1):
             for d in range(n_dofs):
                 uj[d] = previous_u[d] + j / n_sub * (u[d] - previous_u[d])
-            _canonical_substep(kind, fp, ip, uj, h, dt, phases, omegas, alpha, beta, error, drive)
+            _canonical_substep(kind, fp, ip, uj, h, dt, phases, omegas, alpha, beta, error, drive,
+                               cosines, sines)
         previous_u[:] = u
         if kind == AFO:
             near_zero = 0
@@ -324,8 +343,8 @@ class FastOnlineLearner:
             max_phase_step(width))
         capacity = anchor_capacity(dt, p)
         self.ip = np.zeros(7, dtype=np.int64)
-        self.ip[[I_KIND, I_REFERENCE, I_SUM, I_NSUB, I_MAX_WINDOW, I_CAPACITY]] = (
-            self.kind, reference_dof, int(p.dof_coupling == "sum"), substep_count(dt, p.substep_hz),
+        self.ip[[I_KIND, I_REFERENCE, I_MEAN, I_NSUB, I_MAX_WINDOW, I_CAPACITY]] = (
+            self.kind, reference_dof, int(p.dof_coupling == "mean"), substep_count(dt, p.substep_hz),
             p.max_derivative_window, capacity)
         self.scalars = np.zeros(8)
         self.previous_u = np.zeros(n_dofs)

@@ -69,14 +69,14 @@ class AdaptiveOscillatorPool:
     """
 
     def __init__(self, n_dofs: int, params: AFOParameters = AFOParameters(), reference: int = 0,
-                 dof_coupling: str = "sum"):
+                 dof_coupling: str = "mean"):
         if dof_coupling not in DOF_COUPLINGS:
             raise ValueError(f"dof_coupling must be one of {DOF_COUPLINGS}, got {dof_coupling!r}")
         if len(params.initial_frequencies_hz) != 3:
             raise ValueError("the logic step picks the middle of three oscillators: M must be 3")
         self.params = params
         self.reference = reference
-        self.sum_coupling = dof_coupling == "sum"
+        self.mean_coupling = dof_coupling == "mean"
         self.initial_omegas = 2.0 * math.pi * np.asarray(params.initial_frequencies_hz, dtype=np.float64)
         self.phases_ = np.zeros(3)
         self.omegas_ = self.initial_omegas.copy()
@@ -91,7 +91,7 @@ class AdaptiveOscillatorPool:
         cos_i, sin_i = np.cos(self.phases_), np.sin(self.phases_)
         error = u - (cos_i @ self.alpha_ + sin_i @ self.beta_)                 # eqs. 3-4
         drive = phase_drive(error, self.phases_, self.alpha_, self.beta_, self.reference,
-                            self.sum_coupling)
+                            self.mean_coupling)
         self.phases_ = self.phases_ + h * (self.omegas_ - p.coupling * m * drive)          # eq. 1
         limit = 2.0 * math.pi * p.max_frequency_hz
         self.omegas_ = np.clip(self.omegas_ - h * p.frequency_coupling * m * m * drive,

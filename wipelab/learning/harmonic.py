@@ -161,9 +161,10 @@ class PeriodicityEstimate:
     Attributes
     ----------
     score : float
-        Median over windows of several periods of the variance fraction that a harmonic fit
-        (each window at its own best frequency) explains: ~1 for a periodic movement, well
-        below 0.5 for noise, drifts and chirps.
+        Upper quartile over windows of several periods of the variance fraction that a
+        harmonic fit (each window at its own best frequency) explains: ~1 for a periodic
+        movement, also when its frequency changes now and then (only the windows across a
+        change score low) or slowly; below 0.7 for noise, random drifts, a DOF held still.
     frequency_hz : float
         Fundamental of the whole recording.
     periods : float
@@ -176,7 +177,7 @@ class PeriodicityEstimate:
 
 
 def periodicity(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz: float,
-                window_periods: float = 6.0, window_samples: int = 120,
+                window_periods: float = 2.0, window_samples: int = 90,
                 n_harmonics: int = 3) -> PeriodicityEstimate:
     """Estimate whether a recording is periodic, window by window (tolerates frequency changes).
 
@@ -186,15 +187,15 @@ def periodicity(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz: float,
         Uniform times (s).
     Y : ndarray, shape (n, d)
     min_hz, max_hz : float
-        Range of fundamentals to consider (Hz); at least three periods must fit in the
-        recording, so the lower bound is raised to 3 / duration.
+        Range of fundamentals to consider (Hz); the lower bound is raised to 1.5 / duration
+        (a period must be seen more than once; callers judge ``periods``).
     window_periods, window_samples : float, int
         A window spans at least this many fundamental periods and samples; windows overlap by half.
     n_harmonics : int
         Harmonics per window fit (few, so that noise explains little by chance).
     """
     duration = float(t[-1] - t[0])
-    min_hz = min(max(min_hz, 3.0 / duration), max_hz)
+    min_hz = min(max(min_hz, 1.5 / duration), max_hz)
     whole = fundamental_frequency_hz(t, Y, min_hz, max_hz)
     f = whole.frequency_hz
     stride = _stride(t.size, int(window_samples * duration * f / window_periods))
@@ -211,5 +212,5 @@ def periodicity(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz: float,
         best = grid[int(np.argmax(explained))]
         refined = refine_frequency_hz(tw, Yw, best, f * 0.025, n_harmonics)
         scores.append(harmonic_fit(tw, Yw, refined, n_harmonics).explained)
-    return PeriodicityEstimate(score=float(np.median(scores)), frequency_hz=f,
+    return PeriodicityEstimate(score=float(np.percentile(scores, 75)), frequency_hz=f,
                                periods=duration * f)

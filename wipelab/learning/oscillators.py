@@ -13,9 +13,11 @@ Several DOFs share one phase. The *reference* DOF defines it: its component at a
 oscillator's frequency is a pure cosine of that oscillator's phase (the beta coefficient is
 held at 0, as in Petric et al.), so its error drives the phase through e sin(phi) exactly as
 in eqs. 1-2. Every other DOF learns a cosine and a sine coefficient (alpha, beta), i.e. its
-own phase lag theta = atan2(beta, alpha); with ``dof_coupling = "sum"`` it also drives the
-shared phase with e sin(phi - theta) — the same correction seen in its own phase frame —
-faded out while its amplitude R = |(alpha, beta)| is small (factor R / (R + R_FADE)).
+own phase lag theta = atan2(beta, alpha); with ``dof_coupling = "mean"`` it also drives the
+shared phase with e sin(phi - theta) -- the same correction seen in its own phase frame --
+weighted by R / (R + R_FADE), R = |(alpha, beta)|, so that a DOF that barely moves does not
+count. The drive is the weighted mean of the DOFs' terms (the reference weighs 1): the loop
+gain, and so the convergence, does not depend on how many DOFs move.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ import numpy as np
 #: Normalised amplitude below which a non-reference DOF's phase drive is faded out.
 R_FADE = 0.1
 
-DOF_COUPLINGS = ("sum", "reference")
+DOF_COUPLINGS = ("mean", "reference")
 
 #: Frequency at which scaled gains are specified: 1 Hz, in rad/s.
 REFERENCE_OMEGA = 2.0 * math.pi
@@ -39,7 +41,7 @@ def gain_scale(omega: float, scale_with_frequency: bool) -> float:
 
 
 def phase_drive(error: np.ndarray, phase, alpha1: np.ndarray, beta1: np.ndarray, reference: int,
-                sum_coupling: bool) -> np.ndarray:
+                mean_coupling: bool) -> np.ndarray:
     """The coupling term of eqs. 1-2 for several DOFs: K times this is subtracted from phi' and omega'.
 
     Parameters
@@ -52,8 +54,8 @@ def phase_drive(error: np.ndarray, phase, alpha1: np.ndarray, beta1: np.ndarray,
         Each DOF's cosine and sine coefficients at the oscillator(s).
     reference : int
         Index of the reference DOF.
-    sum_coupling : bool
-        Whether the other DOFs contribute (``"sum"``) or only the reference (``"reference"``).
+    mean_coupling : bool
+        Whether the other DOFs contribute (``"mean"``) or only the reference (``"reference"``).
 
     Returns
     -------
@@ -62,12 +64,13 @@ def phase_drive(error: np.ndarray, phase, alpha1: np.ndarray, beta1: np.ndarray,
     phase = np.asarray(phase, dtype=np.float64)
     sin_phi, cos_phi = np.sin(phase)[..., None], np.cos(phase)[..., None]
     drive = error[reference] * np.sin(phase)
-    if sum_coupling:
+    if mean_coupling:
         amplitude = np.hypot(alpha1, beta1)
-        terms = error * (alpha1 * sin_phi - beta1 * cos_phi) / (amplitude + R_FADE)
         others = np.ones(error.shape[0], dtype=bool)
         others[reference] = False
-        drive = drive + (terms * others).sum(axis=-1)
+        terms = error * (alpha1 * sin_phi - beta1 * cos_phi) / (amplitude + R_FADE)
+        drive = (drive + (terms * others).sum(axis=-1)) \
+            / (1.0 + (amplitude / (amplitude + R_FADE) * others).sum(axis=-1))
     return drive
 
 

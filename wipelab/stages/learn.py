@@ -1,6 +1,7 @@
 """The learn and rollout stages: a demonstration -> a periodic movement model -> a trajectory.
 
-``learn`` reads a Trajectory CSV, checks that the chosen DOFs move periodically, learns the
+``learn`` reads a Trajectory CSV (or the ``/track/position`` series of a track.mcap), checks
+that the chosen DOFs move periodically, learns the
 two-layer model (online by default, as the robot watching the demonstration would; or offline
 over the whole recording) and writes ``model.json``, ``learn.mcap``, ``learn.rrd`` and
 ``manifest.json``. ``rollout`` integrates a model into a Trajectory CSV at any frequency,
@@ -36,9 +37,11 @@ from wipelab.learning import (CANONICAL_SYSTEMS, MODEL_FORMAT, LearnHistory, Off
 from wipelab.logs import StageRecorder
 from wipelab.manifest import build_manifest, sha256_file, write_json
 from wipelab.stage_output import staged_output
-from wipelab.trajectory_csv import read_trajectory, write_trajectory
+from wipelab.trajectory_csv import Trajectory, read_trajectory, write_trajectory
 
 MODES = ("online", "offline")
+#: Where a track.mcap holds the sponge position (names x, y, z; valid frames only).
+TRACK_TOPIC = "/track/position"
 #: Fewest samples a demonstration may have.
 MIN_SAMPLES = 20
 
@@ -55,7 +58,7 @@ class LearnParams:
     seed: int = 0                        # [--seed] recorded; learning draws no random numbers
     min_frequency_hz: float = 0.1        # fundamentals searched in [min, max] (Hz)
     max_frequency_hz: float = 5.0
-    min_periodicity: float = 0.5         # refuse input whose periodicity score is lower
+    min_periodicity: float = 0.7         # refuse input whose periodicity score is lower
     min_periods: float = 3.0             # refuse input shorter than this many periods
 
     def __post_init__(self):
@@ -89,9 +92,33 @@ def learn_blueprint(dofs) -> rrb.Blueprint:
         collapse_panels=True)
 
 
+def _track_mcap(path: Path, params: LearnParams) -> Trajectory:
+    """The sponge position of a track.mcap (topic /track/position, valid frames) as a Trajectory."""
+    from mcap.exceptions import McapError
+
+    from wipelab.logs import read_mcap_scalars
+
+    try:
+        t, values, names = read_mcap_scalars(path, TRACK_TOPIC)
+    except FileNotFoundError:
+        raise InputError(f"{path}: file not found") from None
+    except (OSError, McapError, ValueError) as error:
+        raise InputError(f"{path}: cannot be read as MCAP ({error.__class__.__name__}: {error})") from None
+    except KeyError:
+        raise InputError(f"{path}: no {TRACK_TOPIC} messages (not a track.mcap)") from None
+    missing = [dof for dof in params.dofs if dof not in names]
+    if missing:
+        raise InputError(f"{path}: {TRACK_TOPIC} has no {', '.join(missing)} "
+                         f"(has {', '.join(names)})")
+    if np.any(np.diff(t) <= 0) or not np.all(np.isfinite(values)):
+        raise InputError(f"{path}: {TRACK_TOPIC} times not increasing or values not finite")
+    return Trajectory(path=str(path), t=t, columns={n: values[:, j] for j, n in enumerate(names)})
+
+
 def _demonstration(path: Path, params: LearnParams) -> tuple[np.ndarray, np.ndarray]:
     """The chosen DOFs on a uniform time grid; InputError for unusable input."""
-    trajectory = read_trajectory(path, required=("t", *params.dofs))
+    trajectory = _track_mcap(path, params) if path.suffix == ".mcap" else \
+        read_trajectory(path, required=("t", *params.dofs))
     if trajectory.t[0] < 0.0:
         raise InputError(f"{path}: time column t starts at {trajectory.t[0]:g} s; "
                          f"times are seconds since the start of the recording (>= 0)")
@@ -119,7 +146,7 @@ def learn(trajectory: str | os.PathLike, out_dir: str | os.PathLike,
     Parameters
     ----------
     trajectory : path-like
-        Trajectory CSV (DESIGN.md) with columns t and ``params.dofs``.
+        Trajectory CSV (DESIGN.md) with columns t and ``params.dofs``, or a track.mcap.
     out_dir : path-like
         Receives model.json, learn.mcap, learn.rrd, manifest.json (all or nothing).
     params : LearnParams
