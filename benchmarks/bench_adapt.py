@@ -93,7 +93,7 @@ def loop_speed(model_path: Path, seconds: float = 30.0) -> float:
         while session.time - begin < seconds:
             xy, acceleration = path.step(omega, session.dt)
             session.tick(xy, task.start_height, True, path.phase, np.append(acceleration, 0))
-            learner.update(session.trace.columns["tcp_cmd"][-1][2], path.phase, omega)
+            learner.update(session.trace.last("tcp_cmd")[2], path.phase, omega)
         return seconds / (time.perf_counter() - wall)
     finally:
         task.close()

@@ -23,6 +23,23 @@ periods = 2
 """
 
 
+#: learn -> adapt (slowed down: several seconds of simulation, time to interrupt it) ->
+#: a short replay: every stage that works on the simulated robot, kept small.
+ROBOT_PIPELINE = LEARN_PIPELINE.split("[stages.rollout]")[0] + """
+[stages.adapt]
+input = "learn:model.json"
+periods = 2
+slowdown = 6
+
+[stages.replay]
+input = "adapt:adapted_model.json"
+frequency_scale = [1.0, 2.0]
+mode = ["learned+compliance"]
+periods = 1
+warmup_periods = 0
+"""
+
+
 def write_wiping_trajectory(path: Path, frequency_hz: float = 1.2, duration: float = 15.0,
                             rate_hz: float = 30.0, seed: int = 0) -> Path:
     """A noisy circular wiping movement on a table, as track would write it (t, x, y, z)."""

@@ -14,7 +14,7 @@ from wipelab.pipeline.cache import (RECORD_NAME, DigestMemo, StageRecord, code_f
 
 def record_for(stage_dir, memo, key="k1"):
     return StageRecord(key=key, stage="learn", command="learn",
-                       code={"pipeline/cache.py": memo.file(package_root() / "pipeline" / "cache.py")},
+                       code={"pipeline/cache.py": memo.file(package_root() / "pipeline/cache.py")},
                        parameters={"kernels": 25}, input="track/track.csv", input_digest="abc",
                        outputs=memo.files(stage_dir), seconds=1.5)
 
@@ -78,7 +78,8 @@ def test_record_round_trip_and_output_check(tmp_path):
     assert read_record(stage_dir) is None
 
 
-@pytest.mark.parametrize("text", ["", "{", '{"format": "other/1"}', '{"format": "wipelab.stage_cache/1"}'])
+@pytest.mark.parametrize("text", ["", "{", '{"format": "other/1"}',
+                                  '{"format": "wipelab.stage_cache/1"}'])
 def test_unreadable_records_count_as_absent(tmp_path, text):
     (tmp_path / RECORD_NAME).write_text(text)
     assert read_record(tmp_path) is None

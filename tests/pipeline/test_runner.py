@@ -10,6 +10,7 @@ from click.testing import CliRunner
 from wipelab.cli import cli
 from wipelab.errors import InputError
 from wipelab.pipeline.cache import RECORD_NAME, read_record
+from wipelab.pipeline.invoke import build_argv, check_arguments, stage_command
 from wipelab.pipeline.runner import LOCK_NAME, run_pipeline
 from wipelab.pipeline.spec import load_pipeline
 
@@ -77,7 +78,7 @@ def test_two_fresh_runs_in_different_places_write_identical_bytes(learn_pipeline
     run(pipeline, tmp_path / "elsewhere" / "b")
     first, second = published_files(tmp_path / "a"), published_files(tmp_path / "elsewhere" / "b")
     assert sorted(first) == sorted(second)
-    assert {name for name in first if name.endswith((".csv", ".json", ".mcap", ".rrd"))} == set(first)
+    assert all(name.endswith((".csv", ".json", ".mcap", ".rrd")) for name in first)
     assert [name for name in first if first[name] != second[name]] == []
 
 
@@ -92,6 +93,13 @@ def test_cli_run_reports_progress_and_bad_options_without_running_anything(learn
                                     f"option 'kernel' (options: ")
     assert not (run_dir / "learn").exists()
 
+    result = runner.invoke(cli, ["run", str(learn_pipeline_file), "-o", str(run_dir),
+                                 "--set", "rollout.periods=many"])
+    assert result.exit_code == 2
+    assert result.stderr == (f"error: {learn_pipeline_file}: stage rollout: Invalid value for "
+                             f"'--periods': 'many' is not a valid float.\n")
+    assert not (run_dir / "learn").exists()
+
     result = runner.invoke(cli, ["run", str(learn_pipeline_file), "-o", str(run_dir), "-q"])
     assert result.exit_code == 0, result.output
     assert result.stderr == ""
@@ -102,7 +110,8 @@ def test_cli_run_reports_progress_and_bad_options_without_running_anything(learn
 
 def test_missing_input_and_busy_run_directory_are_input_errors(learn_pipeline_file, tmp_path):
     pipeline = load_pipeline(learn_pipeline_file)
-    with pytest.raises(InputError, match=r"stage learn: input 'trajectory' \(.*nope\.csv\) not found"):
+    with pytest.raises(InputError,
+                       match=r"stage learn: input 'trajectory' \(.*nope\.csv\) not found"):
         run(pipeline, tmp_path / "run", inputs=[f"trajectory={tmp_path / 'nope.csv'}"])
     run_dir = tmp_path / "busy"
     run_dir.mkdir()
@@ -111,3 +120,24 @@ def test_missing_input_and_busy_run_directory_are_input_errors(learn_pipeline_fi
         with pytest.raises(InputError, match="another wipelab run is using this directory"):
             run(pipeline, run_dir)
     assert not (run_dir / "learn" / RECORD_NAME).exists()
+
+
+def test_a_killed_stage_s_temporary_folder_is_removed_by_the_next_run(learn_pipeline_file,
+                                                                      tmp_path):
+    run_dir = tmp_path / "run"
+    leftover = run_dir / ".learn.partial-x1y2"  # what staged_output leaves when killed
+    leftover.mkdir(parents=True)
+    (leftover / "model.json").write_text("{")
+    reused, _ = run(load_pipeline(learn_pipeline_file), run_dir)
+    assert reused == {"learn": False, "rollout": False}
+    assert not leftover.exists()
+
+
+def test_a_synth_stage_takes_no_input_and_writes_into_its_folder(tmp_path):
+    (tmp_path / "p.toml").write_text('[stages.demo]\ncommand = "synth"\nduration = 2\n')
+    pipeline = load_pipeline(tmp_path / "p.toml")
+    stage = pipeline.stage("demo")
+    command = stage_command("synth")
+    assert build_argv(stage, command, None, "demo", True, "p.toml") == [
+        "demo", "--duration", "2", "--quiet"]
+    check_arguments(stage, command, "p.toml")

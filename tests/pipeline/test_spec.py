@@ -88,6 +88,7 @@ def test_overrides_parse_toml_values_and_fall_back_to_strings(tmp_path):
     ("[stages.learn]\ninput = 'a.csv'\nquiet = true\n", "'quiet' is set by the pipeline runner"),
     ("[stages.learn]\ninput = 'a.csv'\nkernels = {n = 3}\n", "kernels must be a string"),
     ("[stages.'bad name']\ncommand = 'synth'\n", "bad stage name 'bad name'"),
+    ("[stages.report]\ncommand = 'synth'\n", "stage 'report': name taken"),
 ])
 def test_bad_pipeline_files_are_named_with_what_is_wrong(tmp_path, text, message):
     path = write(tmp_path, text)

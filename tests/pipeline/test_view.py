@@ -47,10 +47,12 @@ def test_save_joins_all_stages_into_one_recording(run_dir):
 
 
 def test_without_a_display_it_says_how_to_open_them_and_exits_0(run_dir):
-    result = CliRunner().invoke(view, [str(run_dir)], env={"DISPLAY": None, "WAYLAND_DISPLAY": None})
+    result = CliRunner().invoke(view, [str(run_dir)],
+                                env={"DISPLAY": None, "WAYLAND_DISPLAY": None})
     assert result.exit_code == 0, result.output
     assert result.output.startswith("No display ($DISPLAY and $WAYLAND_DISPLAY are unset)")
-    assert f"rerun {run_dir / 'learn' / 'learn.rrd'} {run_dir / 'track' / 'track.rrd'}" in result.output
+    files = f"{run_dir / 'learn' / 'learn.rrd'} {run_dir / 'track' / 'track.rrd'}"
+    assert f"rerun {files}" in result.output
     assert "--serve-web" in result.output
 
 

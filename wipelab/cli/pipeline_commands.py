@@ -12,8 +12,6 @@ from pathlib import Path
 
 import click
 
-from wipelab.errors import InputError
-
 _PATH = click.Path(path_type=Path)
 
 
@@ -74,21 +72,20 @@ def dataset(ctx: click.Context, data_dir: Path, pipeline_file: Path, jobs: int,
     """
     from tqdm import tqdm
 
-    from wipelab.pipeline.dataset import (find_demos, format_summary, run_dataset,
+    from wipelab.pipeline.dataset import (dataset_tasks, format_summary, run_dataset,
                                           write_summary_csv)
     from wipelab.pipeline.spec import load_pipeline
 
     pipeline = load_pipeline(pipeline_file).with_overrides(sets=sets)
     out_dir = out_dir if out_dir is not None else Path("runs") / f"dataset-{pipeline.name}"
-    total = len(find_demos(data_dir))
-    with tqdm(total=total, unit="demo", desc="dataset", disable=quiet) as bar:
+    tasks = dataset_tasks(pipeline, data_dir, out_dir)
+    with tqdm(total=len(tasks), unit="demo", desc="dataset", disable=quiet) as bar:
         def on_result(result) -> None:
             bar.update(1)
             if not result.ok:
                 bar.write(f"failed {result.demo}: {result.error}", file=sys.stderr)
 
-        results = run_dataset(pipeline, data_dir, out_dir, jobs=jobs, scheduler=scheduler,
-                              on_result=on_result)
+        results = run_dataset(tasks, jobs=jobs, scheduler=scheduler, on_result=on_result)
     summary = out_dir / "summary.csv"
     write_summary_csv(summary, results)
     click.echo(format_summary(results))

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wipelab.learning.oscillators import (DOF_COUPLINGS, gain_scale, interpolated_inputs,
-                                          phase_drive)
+                                          nearest_turn, phase_drive)
 
 
 @dataclass(frozen=True)
@@ -111,6 +111,16 @@ class AdaptiveOscillatorPool:
             self._zero_time = 0.0
             self.resets_ += 1
 
+    def lock(self, omega: float, phase: float, alpha: np.ndarray, beta: np.ndarray, dt: float) -> None:
+        """Start from a known fundamental and series (see :func:`locked_pool`); dt is unused
+        (the pool has no Nyquist cut-off). Each phase moves by less than half a turn."""
+        del dt
+        omegas, phases, pool_alpha, pool_beta = locked_pool(omega, phase, alpha, beta, self.reference)
+        self.phases_ = self.phases_ + np.array([nearest_turn(v) for v in phases - self.phases_])
+        self.omegas_ = omegas
+        self.alpha_, self.beta_ = pool_alpha.T.copy(), pool_beta.T.copy()
+        self._zero_time = 0.0
+
     def advance(self, previous: np.ndarray, current: np.ndarray, dt: float, n_sub: int) -> None:
         """Integrate over one sample interval dt (input (d,) linear from previous to current),
         then apply the logic step."""
@@ -134,3 +144,55 @@ class AdaptiveOscillatorPool:
         middle = int(np.argsort(np.abs(self.omegas_), kind="stable")[1])
         sign = 1.0 if self.omegas_[middle] >= 0.0 else -1.0
         return sign * self.phases_[middle], abs(self.omegas_[middle])
+
+
+def locked_pool(omega: float, phase: float, alpha: np.ndarray, beta: np.ndarray,
+                reference: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The pool state that a known fundamental and series converge to.
+
+    Oscillator 1 sits at 0 Hz and carries the offset, oscillator 2 the fundamental (phase
+    ``phase``), oscillator 3 the stronger of the 2nd and 3rd harmonics, with its own phase so
+    that the reference DOF's beta is 0. Loops only: the online kernel compiles this function.
+
+    Parameters
+    ----------
+    omega : float
+        Fundamental Omega (rad/s).
+    phase : float
+        Fundamental phase now (rad).
+    alpha, beta : ndarray, shape (d, K + 1), K >= 1
+        Series coefficients in the fundamental phase (normalised input with its offset).
+    reference : int
+        Index of the reference DOF.
+
+    Returns
+    -------
+    omegas, phases : ndarray, shape (3,)
+        omega_i (rad/s) and phi_i now (rad).
+    alpha, beta : ndarray, shape (d, 3)
+        Amplitudes per DOF and oscillator.
+    """
+    d, n_coef = alpha.shape
+    k, best = 2, -1.0
+    for c in range(2, min(3, n_coef - 1) + 1):
+        power = 0.0
+        for j in range(d):
+            power += alpha[j, c] ** 2 + beta[j, c] ** 2
+        if power > best:
+            k, best = c, power
+    pool_alpha = np.zeros((d, 3))
+    pool_beta = np.zeros((d, 3))
+    theta = 0.0
+    if k < n_coef:
+        theta = math.atan2(beta[reference, k], alpha[reference, k])
+        for j in range(d):
+            pool_alpha[j, 2] = alpha[j, k] * math.cos(theta) + beta[j, k] * math.sin(theta)
+            pool_beta[j, 2] = beta[j, k] * math.cos(theta) - alpha[j, k] * math.sin(theta)
+    for j in range(d):
+        pool_alpha[j, 0] = alpha[j, 0]
+        pool_alpha[j, 1] = alpha[j, 1]
+        pool_beta[j, 1] = beta[j, 1]
+    pool_beta[reference, 2] = 0.0
+    omegas = np.array([0.0, omega, k * omega])
+    phases = np.array([0.0, phase, k * phase - theta])
+    return omegas, phases, pool_alpha, pool_beta

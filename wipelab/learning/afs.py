@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wipelab.learning.oscillators import (DOF_COUPLINGS, gain_scale, interpolated_inputs,
-                                          phase_drive)
+                                          nearest_turn, phase_drive)
 
 
 @dataclass(frozen=True)
@@ -100,6 +100,26 @@ class AdaptiveFourierSeries:
         self.alpha_ += (h * p.learning_rate * m) * error[:, None] * cos_c
         self.beta_ += (h * p.learning_rate * m) * error[:, None] * sin_c
         self.beta_[self.reference, 1] = 0.0
+
+    def lock(self, omega: float, phase: float, alpha: np.ndarray, beta: np.ndarray, dt: float) -> None:
+        """Start from a known frequency and series (see :func:`~wipelab.learning.harmonic.locked_series`).
+
+        Parameters
+        ----------
+        omega : float
+            Omega (rad/s).
+        phase : float
+            phi now (rad); the nearest equivalent angle to the current phase is taken.
+        alpha, beta : ndarray, shape (d, M + 1)
+            Series coefficients in phi.
+        dt : float
+            Sample interval (s).
+        """
+        self.dt = dt
+        self.omega_ = float(omega)
+        self.phase_ += nearest_turn(phase - self.phase_)
+        self.alpha_ = np.array(alpha, dtype=np.float64)
+        self.beta_ = np.array(beta, dtype=np.float64)
 
     def advance(self, previous: np.ndarray, current: np.ndarray, dt: float, n_sub: int) -> None:
         """Integrate over one sample interval dt with the input (d,) linear from previous to current."""

@@ -6,6 +6,13 @@ evaluated at the window's centre: no phase lag relative to the centre sample, at
 learning (L - 1) / 2 samples late. The learner pairs the estimate with the phase and
 frequency recorded at that centre sample, so the weights are learned at the right phase.
 L follows the current period (a fixed fraction of it, odd, at least 5 samples).
+
+The same polynomial also gives position, velocity and acceleration *between* samples
+(:meth:`CentredDerivatives.between`). At 30 Hz a 3 Hz movement has ten samples per period
+for 25 kernels: the samples fall on ten phases, and a kernel between two of them learns only
+from its tails. Updating the regression at points within half a sample of the centre,
+spaced by at most half the kernel spacing, covers every kernel (see
+:func:`wipelab.learning.online.update_points`).
 """
 
 from __future__ import annotations
@@ -16,6 +23,56 @@ from functools import lru_cache
 import numpy as np
 
 MIN_WINDOW = 5
+
+
+@lru_cache(maxsize=64)
+def polynomial_fit_matrix(window: int, degree: int) -> np.ndarray:
+    """Least-squares polynomial coefficients from a window: row q gives c_q of sum_q c_q j^q.
+
+    Parameters
+    ----------
+    window : int
+        L, odd, >= 3; j = -(L - 1) / 2 .. (L - 1) / 2 samples from the centre.
+    degree : int
+        Polynomial degree p (clipped to L - 1).
+
+    Returns
+    -------
+    ndarray, shape (p + 1, L)
+    """
+    if window < 3 or window % 2 == 0:
+        raise ValueError(f"window must be odd and >= 3, got {window}")
+    degree = min(degree, window - 1)
+    j = np.arange(window) - (window - 1) / 2
+    matrix = np.linalg.pinv(j[:, None] ** np.arange(degree + 1))
+    matrix.setflags(write=False)
+    return matrix
+
+
+def evaluate_polynomial(coefficients: np.ndarray, x: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Value, 1st and 2nd derivative (per sample^k) at x samples from the centre.
+
+    Parameters
+    ----------
+    coefficients : ndarray, shape (p + 1, d)
+        From ``polynomial_fit_matrix(L, p) @ values``.
+    x : float
+        Position in samples relative to the window's centre.
+
+    Returns
+    -------
+    y, y', y'' : ndarray, shape (d,) each
+    """
+    value = np.zeros(coefficients.shape[1])
+    first = np.zeros(coefficients.shape[1])
+    second = np.zeros(coefficients.shape[1])
+    for q in range(coefficients.shape[0]):
+        value += coefficients[q] * x ** q
+        if q >= 1:
+            first += q * coefficients[q] * x ** (q - 1)
+        if q >= 2:
+            second += q * (q - 1) * coefficients[q] * x ** (q - 2)
+    return value, first, second
 
 
 @lru_cache(maxsize=64)
@@ -35,12 +92,7 @@ def savgol_centre_coefficients(window: int, degree: int) -> np.ndarray:
         Row k applied to the L samples (oldest first) gives d^k y / dj^k at the centre, with j
         in samples; divide by dt^k for time units.
     """
-    if window < 3 or window % 2 == 0:
-        raise ValueError(f"window must be odd and >= 3, got {window}")
-    degree = min(degree, window - 1)
-    j = np.arange(window) - (window - 1) / 2
-    vandermonde = j[:, None] ** np.arange(degree + 1)
-    coefficients = np.linalg.pinv(vandermonde)[:3] * np.array([1.0, 1.0, 2.0])[:, None]
+    coefficients = polynomial_fit_matrix(window, degree)[:3] * np.array([1.0, 1.0, 2.0])[:, None]
     coefficients.setflags(write=False)
     return coefficients
 
@@ -99,3 +151,26 @@ class CentredDerivatives:
         centre = slots[(window - 1) // 2]
         return (estimates[0], estimates[1] / self.dt, estimates[2] / self.dt ** 2,
                 self.phases_[centre], self.omegas_[centre])
+
+    def between(self, omega: float, points: int):
+        """Estimates at ``points`` positions x_s = (s + 1/2) / points - 1/2 samples around the
+        centre of the current window (x = 0 for one point), or None while too few samples.
+
+        The phase at x is the centre sample's phase plus x Omega_c dt.
+
+        Returns
+        -------
+        (y, yd, ydd, phase, omega) : ndarray (points, d) x 3 in m, m/s, m/s^2; ndarray
+        (points,) in rad; float, Omega at the centre sample in rad/s
+        """
+        window = window_for(omega, self.dt, self.window_periods, self.max_window)
+        if self.count_ < window:
+            return None
+        slots = (self.count_ - window + np.arange(window)) % self.max_window
+        coefficients = polynomial_fit_matrix(window, self.degree) @ self.values_[slots]
+        centre = slots[(window - 1) // 2]
+        omega_c = self.omegas_[centre]
+        offsets = (np.arange(points) + 0.5) / points - 0.5
+        estimates = np.array([evaluate_polynomial(coefficients, x) for x in offsets])  # (S, 3, d)
+        return (estimates[:, 0], estimates[:, 1] / self.dt, estimates[:, 2] / self.dt ** 2,
+                self.phases_[centre] + offsets * omega_c * self.dt, omega_c)

@@ -214,3 +214,63 @@ def periodicity(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz: float,
         scores.append(harmonic_fit(tw, Yw, refined, n_harmonics).explained)
     return PeriodicityEstimate(score=float(np.percentile(scores, 75)), frequency_hz=f,
                                periods=duration * f)
+
+
+#: Ridge on the normal equations of :func:`locked_series`, relative to the sample count: it
+#: only decides a harmonic that sits on the Nyquist frequency (whose sine column vanishes).
+LOCK_RIDGE = 1e-9
+
+
+def locked_series(U: np.ndarray, dt: float, omega: float, n_terms: int,
+                  reference: int) -> tuple[float, np.ndarray, np.ndarray]:
+    """The Fourier series of recent input at a known frequency, in a canonical system's phase.
+
+    Least squares of u_j(t) = sum_{c=0}^{K} a_cj cos(c w t) + b_cj sin(c w t) over the
+    samples (t <= 0, the last sample at t = 0), then rewritten in the phase
+    phi = w t - theta that makes the reference DOF's fundamental a cosine (beta_1 = 0 for it,
+    the convention of the AFS and the AFO pool). Written with loops and numba-supported
+    calls: the online kernel compiles this very function.
+
+    Parameters
+    ----------
+    U : ndarray, shape (n, d)
+        Normalised input, one sample every dt, at least one period; oldest first.
+    dt : float
+        Sample interval (s).
+    omega : float
+        Frequency (rad/s).
+    n_terms : int
+        K, highest harmonic (terms at or above the Nyquist frequency are left at 0).
+    reference : int
+        The DOF whose fundamental defines phase 0.
+
+    Returns
+    -------
+    phase : float
+        phi at the last sample (rad, in (-pi, pi]).
+    alpha, beta : ndarray, shape (d, K + 1)
+        Cosine and sine coefficients of c phi per DOF (beta[:, 0] = 0).
+    """
+    n, d = U.shape
+    observable = min(n_terms, int(math.ceil(math.pi / (omega * dt))) - 1)
+    columns = 2 * observable + 1
+    design = np.empty((n, columns))
+    for k in range(n):
+        angle = omega * dt * (k - n + 1)
+        design[k, 0] = 1.0
+        for c in range(1, observable + 1):
+            design[k, 2 * c - 1] = math.cos(c * angle)
+            design[k, 2 * c] = math.sin(c * angle)
+    gram = design.T @ design + LOCK_RIDGE * n * np.eye(columns)
+    coefficients = np.linalg.solve(gram, design.T @ np.ascontiguousarray(U))    # (2K + 1, d)
+    theta = math.atan2(coefficients[2, reference], coefficients[1, reference])
+    alpha = np.zeros((d, n_terms + 1))
+    beta = np.zeros((d, n_terms + 1))
+    for j in range(d):
+        alpha[j, 0] = coefficients[0, j]
+        for c in range(1, observable + 1):
+            a, b = coefficients[2 * c - 1, j], coefficients[2 * c, j]
+            alpha[j, c] = a * math.cos(c * theta) + b * math.sin(c * theta)
+            beta[j, c] = b * math.cos(c * theta) - a * math.sin(c * theta)
+    beta[reference, 1] = 0.0
+    return -theta, alpha, beta

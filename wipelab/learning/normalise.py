@@ -96,6 +96,10 @@ class PeriodStatistics:
         self.sums_ = np.zeros((capacity, n_dofs))
         self.squares_ = np.zeros((capacity, n_dofs))
 
+    def restart(self) -> None:
+        """Forget the past: the next window starts at the next sample."""
+        self.count_ = 0
+
     def _prefix(self, back: int) -> tuple[np.ndarray, np.ndarray]:
         """Prefix sums up to and including sample count_ - 1 - back (zero before the first)."""
         index = self.count_ - 1 - back
@@ -125,3 +129,19 @@ class PeriodStatistics:
         mean = total / window
         variance = np.maximum(total_square / window - mean ** 2, 0.0)
         return self.reference_ + mean, np.sqrt(2.0 * variance)
+
+
+class RecentSamples:
+    """Ring buffer of the last ``capacity`` samples (d,), oldest first on read."""
+
+    def __init__(self, n_dofs: int, capacity: int):
+        self.values_ = np.zeros((capacity, n_dofs))
+        self.count_ = 0
+
+    def push(self, y: np.ndarray) -> None:
+        self.values_[self.count_ % self.values_.shape[0]] = y
+        self.count_ += 1
+
+    def last(self, n: int) -> np.ndarray:
+        """The last n samples (n <= capacity and <= count_), shape (n, d), oldest first."""
+        return self.values_[(self.count_ - n + np.arange(n)) % self.values_.shape[0]]

@@ -53,7 +53,9 @@ from wipelab.learning.dmp import PeriodicDMP, forcing_target
 from wipelab.learning.kernels import default_width, kernel_activations
 from wipelab.learning.lwr import IncrementalLWR
 from wipelab.learning.model import PeriodicModel
-from wipelab.learning.normalise import PeriodStatistics, RunningNormaliser
+from wipelab.learning.harmonic import locked_series
+from wipelab.learning.normalise import PeriodStatistics, RecentSamples, RunningNormaliser
+from wipelab.learning.period_detector import PeriodDetector, PeriodDetectorParameters
 from wipelab.learning.oscillators import substep_count
 
 CANONICAL_SYSTEMS = ("afs", "afo")
@@ -71,6 +73,7 @@ class OnlineParameters:
     forgetting: float = 0.99                # lambda of eq. 14
     forgetting_samples_per_period: float | None = 100.0  # lambda counts per 1/this of a period
     p0: float = 1.0                         # P_i(0) of eq. 14
+    update_spacing: float | None = 0.5      # LWR updates at most this x 2 pi / N apart in phase (None: 1 per sample)
     dof_coupling: str = "mean"              # "mean": every moving DOF drives the phase; "reference": one
     substep_hz: float = 500.0               # oscillators integrate at >= this rate (Hz)
     normaliser_time_constant_s: float = 10.0  # tau: the range relaxes by dt / tau per sample (s)
@@ -79,6 +82,8 @@ class OnlineParameters:
     max_derivative_window: int = 101        # samples, odd
     min_frequency_hz: float = 0.1           # longest period the anchor window covers (Hz)
     statistics_periods: int = 1             # periods over which Omega, g and r are averaged
+    start_up: bool = True                   # hand the detected period to the canonical system
+    detector: PeriodDetectorParameters = field(default_factory=PeriodDetectorParameters)
     weights_every_s: float = 0.05           # interval of the weight snapshots in the history (s)
     afs: AFSParameters = field(default_factory=AFSParameters)
     afo: AFOParameters = field(default_factory=AFOParameters)
@@ -161,11 +166,19 @@ class OnlineLearner:
         else:
             self.canonical = AdaptiveOscillatorPool(n_dofs, params.afo, reference_dof, params.dof_coupling)
             offset = 1.0
+        self.offset = offset
+        self.reference_dof = reference_dof
         self.normaliser = RunningNormaliser(n_dofs, dt, params.normaliser_time_constant_s, offset)
-        # Columns: the d DOFs, then the oscillator's Omega (its mean over the window is the
-        # fundamental, free of the ripple the coupling term puts on the instantaneous value).
-        self.statistics = PeriodStatistics(n_dofs + 1, dt, anchor_capacity(dt, params),
-                                           params.statistics_periods)
+        self.detector = PeriodDetector(n_dofs, dt, params.detector, params.min_frequency_hz,
+                                       self.canonical.params.max_frequency_hz) \
+            if params.start_up else None
+        self.recent = RecentSamples(n_dofs, recent_capacity(dt, params)) if params.start_up else None
+        self.locked_ = False
+        capacity = anchor_capacity(dt, params)
+        self.statistics = PeriodStatistics(n_dofs, dt, capacity, params.statistics_periods)
+        # The fundamental is the oscillator's Omega averaged over the last period: free of
+        # the ripple the coupling term puts on the instantaneous value.
+        self.frequency_statistics = PeriodStatistics(1, dt, capacity, params.statistics_periods)
         self.derivatives = CentredDerivatives(n_dofs, dt, params.derivative_window_periods,
                                               params.derivative_degree, params.max_derivative_window)
         self.lwr = IncrementalLWR(params.kernels, n_dofs, params.forgetting, params.p0)
@@ -173,37 +186,70 @@ class OnlineLearner:
                                params.alpha_s, params.beta_s)
         self.goal_ = np.zeros(n_dofs)
         self.amplitude_ = np.ones(n_dofs)
+        self._moving = np.zeros(n_dofs, dtype=bool)
         self.count_ = 0
         self._previous_input = np.zeros(n_dofs)
         self._previous_phase = 0.0
         self._previous_omega = 0.0
         self.omega_ = 0.0
 
+    def _normalised(self, y: np.ndarray) -> np.ndarray:
+        """u = (y - g) / r + offset over the last period once locked (0 for a still DOF)."""
+        return np.where(self._moving, (y - self.goal_) / self.amplitude_, 0.0) + self.offset
+
+    def _update_statistics(self, y: np.ndarray, omega: float) -> None:
+        self.goal_, amplitude = self.statistics.update(y, omega)
+        self._moving = amplitude > 0.0
+        self.amplitude_ = np.where(self._moving, amplitude, 1.0)
+
+    def _lock(self, y: np.ndarray) -> np.ndarray:
+        """Hand the detected period to the canonical system with the series of the recent input."""
+        p = self.params
+        omega = 2.0 * math.pi / self.detector.period_s_
+        self._update_statistics(y, omega)
+        count = min(self.recent.count_, int(round((1.0 + p.detector.confirm)
+                                                   * self.detector.period_s_ / self.dt)))
+        window = self._normalised(self.recent.last(count))
+        n_terms = p.afs.n_terms if p.canonical == "afs" else 3
+        phase, alpha, beta = locked_series(window, self.dt, omega, n_terms, self.reference_dof)
+        self.canonical.lock(omega, phase, alpha, beta, self.dt)
+        self.frequency_statistics.restart()
+        self.locked_ = True
+        return window[-1]
+
     def step(self, y: np.ndarray) -> np.ndarray:
         """Process one sample y (d,) in m; return the DMP output (d,) at the same time."""
         p = self.params
         y = np.asarray(y, dtype=np.float64)
-        u = self.normaliser.update(y)
         if self.count_ == 0:
-            self._previous_input = u
             self.dmp.reset(y, np.zeros_like(y))
-        self.canonical.advance(self._previous_input, u, self.dt, self.n_sub)
+        if not self.locked_ and self.detector is not None:
+            self.recent.push(y)
+        if not self.locked_ and self.detector is not None and self.detector.update(y):
+            u = self._lock(y)
+        else:
+            self._update_statistics(y, self.canonical.fundamental[1])
+            u = self._normalised(y) if self.locked_ else self.normaliser.update(y)
+            if self.count_ == 0:
+                self._previous_input = u
+            self.canonical.advance(self._previous_input, u, self.dt, self.n_sub)
         self._previous_input = u
         phase, omega_now = self.canonical.fundamental
-        means, amplitude = self.statistics.update(np.append(y, omega_now), omega_now)
-        self.goal_ = means[:-1]
-        self.amplitude_ = np.where(amplitude[:-1] > 0.0, amplitude[:-1], 1.0)
-        omega = self.omega_ = max(means[-1], 2.0 * math.pi * p.min_frequency_hz)
+        mean_omega, _ = self.frequency_statistics.update(np.array([omega_now]), omega_now)
+        omega = self.omega_ = max(float(mean_omega[0]), 2.0 * math.pi * p.min_frequency_hz)
         self.derivatives.push(y, phase, omega)
-        centre = self.derivatives.centre(omega)
-        if centre is not None:
-            yc, ydc, yddc, phase_c, omega_c = centre
-            f_target = forcing_target(yc, ydc, yddc, omega_c, self.goal_, p.alpha_s, p.beta_s)
-            psi = kernel_activations(phase_c, p.kernels, p.kernel_width)
-            # f_targ ~ w r, regressed in units of r: the prior P0 = 1 then weighs the same for
-            # any scale of the movement (with r in metres it would outweigh seconds of data).
-            self.lwr.update(psi, np.ones_like(self.amplitude_), f_target / self.amplitude_,
-                            forgetting_factor(p, omega_c * self.dt))
+        points = update_points(p, omega * self.dt)
+        estimates = self.derivatives.between(omega, points)
+        if estimates is not None:
+            y_x, yd_x, ydd_x, phases_x, omega_c = estimates
+            forgetting = forgetting_factor(p, omega_c * self.dt / points)
+            for yc, ydc, yddc, phase_c in zip(y_x, yd_x, ydd_x, phases_x):
+                f_target = forcing_target(yc, ydc, yddc, omega_c, self.goal_, p.alpha_s, p.beta_s)
+                psi = kernel_activations(phase_c, p.kernels, p.kernel_width)
+                # f_targ ~ w r, regressed in units of r: the prior P0 = 1 then weighs the same
+                # for any scale of the movement (with r in metres it would outweigh seconds of data).
+                self.lwr.update(psi, np.ones_like(self.amplitude_), f_target / self.amplitude_,
+                                forgetting)
         self.dmp.goal, self.dmp.amplitude = self.goal_, self.amplitude_
         if self.count_ > 0:
             self.dmp.step(self._previous_phase, self._previous_omega, self.dt)
@@ -231,9 +277,28 @@ def forgetting_factor(params: OnlineParameters, phase_step: float) -> float:
     return params.forgetting ** (phase_step * params.forgetting_samples_per_period / (2.0 * math.pi))
 
 
+def update_points(params: OnlineParameters, phase_step: float) -> int:
+    """Regression updates per sample that advances the phase by ``phase_step`` (rad).
+
+    One per sample as printed, or enough that consecutive update phases are at most
+    ``update_spacing`` kernel spacings (2 pi / N) apart.
+    """
+    if params.update_spacing is None:
+        return 1
+    spacing = params.update_spacing * 2.0 * math.pi / params.kernels
+    return max(1, int(math.ceil(phase_step / spacing - 1e-9)))
+
+
 def anchor_capacity(dt: float, params: OnlineParameters) -> int:
     """Ring-buffer length of the period statistics: the longest window in samples, plus 2."""
     return int(math.ceil(params.statistics_periods / (params.min_frequency_hz * dt))) + 2
+
+
+def recent_capacity(dt: float, params: OnlineParameters) -> int:
+    """Samples kept for the series fit at the hand-over: the span the detector compares at
+    the lowest frequency, plus a block."""
+    return int(math.ceil((1.0 + params.detector.confirm) / (params.min_frequency_hz * dt))) \
+        + int(round(1.0 / (dt * params.detector.rate_hz))) + 2
 
 
 def build_model(dofs, params: OnlineParameters, frequency_hz: float, phase: float, t_last: float,

@@ -74,6 +74,11 @@ def phase_drive(error: np.ndarray, phase, alpha1: np.ndarray, beta1: np.ndarray,
     return drive
 
 
+def nearest_turn(angle: float) -> float:
+    """angle wrapped to [-pi, pi) (rad): the smallest change of phase to reach a target angle."""
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
 def substep_count(dt: float, substep_hz: float) -> int:
     """Euler substeps per sample so that the oscillators integrate at >= substep_hz."""
     return max(1, int(np.ceil(dt * substep_hz - 1e-9)))

@@ -12,6 +12,7 @@ from typing import Any, Sequence
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
+from foxglove import messages as fm
 
 from wipelab.logs import foxglove_messages as fx
 from wipelab.logs.mcap_log import McapLog, json_bytes, json_ready
@@ -293,6 +294,80 @@ class StageRecorder:
         self.rerun.log(entity, rr.Transform3D(translation=np.asarray(translation, dtype=float).reshape(3),
                                               quaternion=fx.unit_quaternion(q_xyzw), **frames),
                        rr.TransformAxes3D(POSE_AXIS_LENGTH))
+
+    # -- whole series at once (MCAP: one message per time as above; Rerun: send_columns) ---
+    def _time_column(self, t: np.ndarray) -> tuple[np.ndarray, list]:
+        ns = seconds_array_to_ns(t)
+        return ns, [rr.TimeColumn(TIMELINE, duration=ns.astype("timedelta64[ns]"))]
+
+    def transform_series(self, t: np.ndarray, frames: Sequence[tuple]) -> None:
+        """Moving frames over time: ``[(parent, child, translations (n, 3), q_xyzw (n, 4)), ...]``
+        at times ``t`` (n,) in seconds.
+
+        The same as :meth:`transforms` at each time (MCAP: one ``foxglove.FrameTransforms``
+        per time holding every frame), with one ``send_columns`` per frame on the Rerun side.
+        """
+        ns, index = self._time_column(t)
+        frames = [(parent, child, np.asarray(translations, dtype=float).reshape(-1, 3),
+                   np.asarray(quaternions, dtype=float).reshape(-1, 4))
+                  for parent, child, translations, quaternions in frames]
+        for parent, child, translations, quaternions in frames:
+            if translations.shape[0] != ns.size or quaternions.shape[0] != ns.size:
+                raise ValueError(f"frame {child!r}: need {ns.size} translations and quaternions")
+        channel = self._mcap.protobuf_channel(TF_TOPIC, fm.FrameTransforms)
+        for k, time_ns in enumerate(ns.tolist()):
+            message = fx.frame_transforms(time_ns, [(parent, child, translations[k], quaternions[k])
+                                                    for parent, child, translations, quaternions
+                                                    in frames])
+            self._mcap.write(channel, time_ns, message.encode())
+        for parent, child, translations, quaternions in frames:
+            unit = np.array([fx.unit_quaternion(q) for q in quaternions]).reshape(-1, 4)
+            self.rerun.send_columns(_checked_topic(f"{TF_TOPIC}/{child}"), indexes=index,
+                                    columns=rr.Transform3D.columns(
+                                        translation=translations, quaternion=unit,
+                                        parent_frame=[rerun_frame(parent)] * ns.size,
+                                        child_frame=[child] * ns.size))
+
+    def pose_series(self, topic: str, t: np.ndarray, frame_id: str, translations: np.ndarray,
+                    q_xyzw: np.ndarray) -> None:
+        """Poses (n, 3) and (n, 4) at times ``t`` (n,): :meth:`pose` at each time, with one
+        ``send_columns`` on the Rerun side (axes drawn by a static ``TransformAxes3D``)."""
+        entity = _checked_topic(topic)
+        ns, index = self._time_column(t)
+        translations = np.asarray(translations, dtype=float).reshape(-1, 3)
+        unit = np.array([fx.unit_quaternion(q) for q in np.asarray(q_xyzw).reshape(-1, 4)])
+        if translations.shape[0] != ns.size or unit.shape[0] != ns.size:
+            raise ValueError(f"{topic}: need {ns.size} translations and quaternions")
+        channel = self._mcap.protobuf_channel(topic, fm.PoseInFrame)
+        for time_ns, translation, quaternion in zip(ns.tolist(), translations, unit):
+            self._mcap.write(channel, time_ns,
+                             fx.pose_in_frame(time_ns, frame_id, translation, quaternion).encode())
+        frames = {} if frame_id == WORLD_FRAME else \
+            {"parent_frame": [frame_id] * ns.size, "child_frame": [f"tf#{entity}"] * ns.size}
+        self.rerun.log(entity, rr.TransformAxes3D(POSE_AXIS_LENGTH), static=True)
+        self.rerun.send_columns(entity, indexes=index, columns=rr.Transform3D.columns(
+            translation=translations, quaternion=unit, **frames))
+
+    def arrow_series(self, topic: str, t: np.ndarray, origins: np.ndarray, vectors: np.ndarray,
+                     color=(255, 64, 64), frame_id: str = WORLD_FRAME) -> None:
+        """One arrow per time: origins (n, 3) and vectors (n, 3) at times ``t`` (n,), metres;
+        :meth:`arrow3d` at each time, with one ``send_columns`` on the Rerun side."""
+        entity = _checked_topic(topic)
+        ns, index = self._time_column(t)
+        origins = np.asarray(origins, dtype=float).reshape(-1, 3)
+        vectors = np.asarray(vectors, dtype=float).reshape(-1, 3)
+        if origins.shape != vectors.shape or origins.shape[0] != ns.size:
+            raise ValueError(f"{topic}: need {ns.size} origins and vectors")
+        rgba = fx.rgba_uint8(color, 1)
+        channel = self._mcap.protobuf_channel(topic, fm.SceneUpdate)
+        for time_ns, origin, vector in zip(ns.tolist(), origins, vectors):
+            self._mcap.write(channel, time_ns, fx.scene_arrows(time_ns, frame_id, topic,
+                                                               origin[None], vector[None],
+                                                               rgba).encode())
+        self._place(entity, frame_id)
+        self.rerun.send_columns(entity, indexes=index, columns=rr.Arrows3D.columns(
+            origins=origins, vectors=vectors,
+            colors=np.broadcast_to(rgba, (ns.size, 4))))
 
     def camera_calibration(self, topic: str, t: float, K: np.ndarray, D: np.ndarray, width: int,
                            height: int, frame_id: str, R: np.ndarray | None = None,

@@ -4,7 +4,7 @@ A demo directory is any directory under DATA_DIR that holds ``left.mp4``, ``righ
 ``calibration.yaml`` (a demo missing one of them is still found, and reported as failed by
 ``track``). Each demo gets its own run directory ``OUT/runs/<demo>`` (so a second pass reuses
 what the first finished), and the pipeline's one named input is replaced by the demo
-directory.
+directory. Paths are absolute, so every worker must see the same file system.
 
 Executors: ``jobs = 1`` runs the demos one after the other in this process; ``jobs > 1``
 uses a ``concurrent.futures.ProcessPoolExecutor`` (spawned processes); a ``scheduler``
@@ -15,12 +15,14 @@ does not stop the others.
 
 from __future__ import annotations
 
+import contextlib
 import csv
+import fnmatch
 import io
 import os
 import time
 import traceback
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -33,6 +35,13 @@ DEMO_FILES = ("left.mp4", "right.mp4", "calibration.yaml")
 
 #: Columns of the summary that every row has, before the metrics.
 SUMMARY_COLUMNS = ("demo", "status", "seconds", "stages_run", "stages_reused")
+
+#: Metrics shown in the printed table (globs over ``<stage>.<key>``; the CSV has them all):
+#: learned frequency, learned height and force errors with the learned profile, and the force
+#: error of the replay with learned profile and compliance at every frequency scale.
+PRINTED_METRICS = ("*.frequency_hz", "*.profile_hold.rms_height_error_m",
+                   "*.force_hold.rms_force_error_n",
+                   "*.scales.*.learned+compliance.rms_force_error_n")
 
 
 @dataclass(frozen=True)
@@ -89,8 +98,37 @@ def demo_input_name(pipeline: Pipeline) -> str:
     return next(iter(pipeline.inputs))
 
 
-def process_demo(pipeline: Pipeline, demo_dir: str, demo_name: str,
-                 run_dir: str) -> DemoResult:
+@dataclass(frozen=True)
+class DemoTask:
+    """One demo to process: the pipeline with the demo as its input, and where to run it."""
+
+    pipeline: Pipeline
+    demo_dir: str   # absolute path of the demo directory
+    demo: str       # its name in the summary (path relative to DATA_DIR)
+    run_dir: str    # absolute path of its run directory
+
+
+def dataset_tasks(pipeline: Pipeline, data_dir: str | os.PathLike,
+                  out_dir: str | os.PathLike) -> list[DemoTask]:
+    """One task per demo under ``data_dir``; demo ``a/b`` runs in ``out_dir/runs/a__b``.
+
+    Raises
+    ------
+    InputError
+        The pipeline has not exactly one named input, or ``data_dir`` holds no demo.
+    """
+    name = demo_input_name(pipeline)
+    data_dir = Path(data_dir).resolve()
+    runs = Path(out_dir).resolve() / "runs"
+    tasks = []
+    for demo in find_demos(data_dir):
+        label = demo.relative_to(data_dir).as_posix() if demo != data_dir else demo.name
+        tasks.append(DemoTask(pipeline.with_overrides(inputs=[f"{name}={demo}"]), str(demo),
+                              label, str(runs / label.replace("/", "__"))))
+    return tasks
+
+
+def process_demo(task: DemoTask) -> DemoResult:
     """Run the pipeline on one demo; never raises for a failure of the demo itself.
 
     Top-level so that process pools and Dask can ship it to another process.
@@ -98,36 +136,33 @@ def process_demo(pipeline: Pipeline, demo_dir: str, demo_name: str,
     from wipelab.pipeline.runner import run_pipeline
 
     start = time.perf_counter()
-    try:
-        demo_pipeline = pipeline.with_overrides(inputs=[f"{demo_input_name(pipeline)}={demo_dir}"])
-        outcomes = run_pipeline(demo_pipeline, run_dir, quiet=True)
+    try:  # what the stages print would interleave between demos: the summary says it all
+        with contextlib.redirect_stdout(io.StringIO()):
+            outcomes = run_pipeline(task.pipeline, task.run_dir, quiet=True)
     except InputError as error:
-        return DemoResult(demo_name, ok=False, error=str(error),
+        return DemoResult(task.demo, ok=False, error=str(error),
                           seconds=time.perf_counter() - start)
     except Exception as error:  # a failing demo must not stop the data set: report it
         where = traceback.extract_tb(error.__traceback__)[-1]
-        return DemoResult(demo_name, ok=False,
+        return DemoResult(task.demo, ok=False,
                           error=f"{type(error).__name__}: {error} "
                                 f"({Path(where.filename).name}:{where.lineno})",
                           seconds=time.perf_counter() - start)
-    return DemoResult(demo_name, ok=True, seconds=time.perf_counter() - start,
+    return DemoResult(task.demo, ok=True, seconds=time.perf_counter() - start,
                       stages_run=sum(not o.reused for o in outcomes),
                       stages_reused=sum(o.reused for o in outcomes),
-                      metrics=run_metrics(run_dir))
+                      metrics=run_metrics(task.run_dir))
 
 
-def run_dataset(pipeline: Pipeline, data_dir: str | os.PathLike, out_dir: str | os.PathLike,
-                jobs: int = 1, scheduler: str | None = None,
+def run_dataset(tasks: Sequence[DemoTask], jobs: int = 1, scheduler: str | None = None,
                 on_result: Callable[[DemoResult], None] = lambda result: None,
                 ) -> list[DemoResult]:
-    """Run ``pipeline`` on every demo under ``data_dir``; results sorted by demo.
+    """Process every task; results sorted by demo.
 
     Parameters
     ----------
-    pipeline : Pipeline
-        With exactly one named input, replaced by each demo directory.
-    data_dir, out_dir : path-like
-        Demos are searched in ``data_dir``; demo ``a/b`` runs in ``out_dir/runs/a__b``.
+    tasks : sequence of DemoTask
+        From :func:`dataset_tasks`.
     jobs : int
         Parallel processes on this machine (ignored with ``scheduler``).
     scheduler : str or None
@@ -137,17 +172,10 @@ def run_dataset(pipeline: Pipeline, data_dir: str | os.PathLike, out_dir: str | 
     """
     if jobs < 1:
         raise InputError(f"-j {jobs}: need at least 1 job")
-    demo_input_name(pipeline)
-    data_dir = Path(data_dir).resolve()
-    runs = Path(out_dir).resolve() / "runs"
-    tasks = []
-    for demo in find_demos(data_dir):
-        name = demo.relative_to(data_dir).as_posix() if demo != data_dir else demo.name
-        tasks.append((pipeline, str(demo), name, str(runs / name.replace("/", "__"))))
     if scheduler is not None:
         results = _on_dask(tasks, scheduler)
     elif jobs == 1:
-        results = (process_demo(*task) for task in tasks)
+        results = map(process_demo, tasks)
     else:
         results = _in_process_pool(tasks, jobs)
     collected = []
@@ -173,7 +201,7 @@ def summary_rows(results: Sequence[DemoResult]) -> tuple[list[str], list[dict[st
 
 
 def write_summary_csv(path: str | os.PathLike, results: Sequence[DemoResult]) -> None:
-    """Write the summary table as CSV (atomically: temporary name, then rename)."""
+    """Write the summary table, every metric, as CSV (atomically: temporary name, rename)."""
     header, rows = summary_rows(results)
     text = io.StringIO()
     writer = csv.DictWriter(text, fieldnames=header, lineterminator="\n")
@@ -189,36 +217,35 @@ def write_summary_csv(path: str | os.PathLike, results: Sequence[DemoResult]) ->
         tmp.unlink(missing_ok=True)
 
 
-def format_summary(results: Sequence[DemoResult], columns: Iterable[str] | None = None) -> str:
-    """The summary as an aligned text table (``columns``: which metrics; default all)."""
+def format_summary(results: Sequence[DemoResult],
+                   metrics: Sequence[str] = PRINTED_METRICS) -> str:
+    """The summary as an aligned text table with the metrics matching ``metrics`` (globs)."""
     header, rows = summary_rows(results)
-    if columns is not None:
-        wanted = set(columns)
-        header = [name for name in header
-                  if name in SUMMARY_COLUMNS or name == "error" or name in wanted]
+    header = [name for name in header if name in SUMMARY_COLUMNS or name == "error"
+              or any(fnmatch.fnmatchcase(name, pattern) for pattern in metrics)]
     table = [header] + [[row[name] for name in header] for row in rows]
     widths = [max(len(line[i]) for line in table) for i in range(len(header) - 1)]
     return "\n".join("  ".join([*(cell.ljust(w) for cell, w in zip(line, widths)), line[-1]])
                      .rstrip() for line in table)
 
 
-def _in_process_pool(tasks: list[tuple], jobs: int) -> Iterator[DemoResult]:
+def _in_process_pool(tasks: Sequence[DemoTask], jobs: int) -> Iterator[DemoResult]:
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed
     from concurrent.futures.process import BrokenProcessPool
 
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
-        futures = {pool.submit(process_demo, *task): task for task in tasks}
+        futures = {pool.submit(process_demo, task): task for task in tasks}
         for future in as_completed(futures):
             try:
                 yield future.result()
             except BrokenProcessPool:
-                yield DemoResult(futures[future][2], ok=False,
+                yield DemoResult(futures[future].demo, ok=False,
                                  error="a worker process died (crash or out of memory)")
 
 
-def _on_dask(tasks: list[tuple], address: str) -> Iterator[DemoResult]:
+def _on_dask(tasks: Sequence[DemoTask], address: str) -> Iterator[DemoResult]:
     from distributed import Client, as_completed
 
     try:
@@ -226,13 +253,10 @@ def _on_dask(tasks: list[tuple], address: str) -> Iterator[DemoResult]:
     except OSError as error:
         raise InputError(f"--scheduler {address}: cannot connect ({error})") from None
     with client:
-        futures = {}
-        for task in tasks:
-            future = client.submit(process_demo, *task, pure=False)
-            futures[future] = task
+        futures = {client.submit(process_demo, task, pure=False): task for task in tasks}
         for future in as_completed(futures):
             try:
                 yield future.result()
             except Exception as error:  # e.g. KilledWorker: the demo is lost, not the data set
-                yield DemoResult(futures[future][2], ok=False,
+                yield DemoResult(futures[future].demo, ok=False,
                                  error=f"{type(error).__name__}: {error}")

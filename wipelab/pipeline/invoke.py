@@ -8,7 +8,6 @@ command, so parsing, validation and defaults are the CLI's own.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 import click
@@ -42,7 +41,7 @@ def build_argv(stage: StageSpec, command: click.Command, input_path: str | None,
     command : click.Command
         The stage's command; its options decide how each parameter is spelled.
     input_path : str or None
-        The input argument (None for commands without input).
+        The input argument (ignored by commands without input).
     output_path : str
         The stage folder, or the output file for commands that write one file.
     quiet : bool
@@ -50,7 +49,7 @@ def build_argv(stage: StageSpec, command: click.Command, input_path: str | None,
     source : str
         The pipeline file, for error messages.
     """
-    argv = [] if input_path is None else [input_path]
+    argv = [input_path] if stage.signature.takes_input else []
     argv += ["-o", output_path] if stage.signature.output_option else [output_path]
     options = [param for param in command.params if isinstance(param, click.Option)]
     for key, value in sorted(stage.parameters.items()):
@@ -65,6 +64,24 @@ def build_argv(stage: StageSpec, command: click.Command, input_path: str | None,
     if quiet and quiet_option is not None:
         argv.append(max(quiet_option.opts, key=len))
     return argv
+
+
+def check_arguments(stage: StageSpec, command: click.Command, source: str) -> None:
+    """Parse the stage's command line as click would, without running it.
+
+    Catches unknown options and values of the wrong type or outside a choice (the stage
+    itself still checks files and ranges when it runs).
+
+    Raises
+    ------
+    InputError
+        Naming the pipeline file, the stage and the problem.
+    """
+    argv = build_argv(stage, command, "INPUT", stage.name, False, source)
+    try:
+        command.make_context(f"wipelab {command.name}", argv)
+    except click.ClickException as error:
+        raise InputError(f"{source}: stage {stage.name}: {error.format_message()}") from None
 
 
 def run_command(command: click.Command, argv: Sequence[str], stage_name: str,

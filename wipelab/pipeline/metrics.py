@@ -18,7 +18,6 @@ from wipelab.pipeline.cache import read_record
 METRIC_FILES: dict[str, tuple[str, ...] | None] = {
     "metrics.json": None,
     "model.json": ("frequency_hz",),
-    "adapted_model.json": ("frequency_hz",),
 }
 
 

@@ -19,11 +19,12 @@ import numpy as np
 from wipelab.errors import InputError
 from wipelab.pipeline.cache import StageRecord, read_record
 from wipelab.pipeline.metrics import run_metrics
+from wipelab.pipeline.spec import REPORT_DIR
 from wipelab.stage_output import staged_output
 
 
 @dataclass(frozen=True)
-class Figure:
+class ReportFigure:
     """One figure of the report: file name and caption."""
 
     file: str
@@ -58,9 +59,9 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike | None =
     stages = stage_records(run_dir)
     if not stages:
         raise InputError(f"{run_dir}: no finished stage (a run directory of `wipelab run`)")
-    out_dir = Path(out_dir) if out_dir is not None else run_dir / "report"
+    out_dir = Path(out_dir) if out_dir is not None else run_dir / REPORT_DIR
     with staged_output(out_dir) as tmp:
-        figures: list[Figure] = []
+        figures: list[ReportFigure] = []
         for stage_dir, record in stages:
             draw = STAGE_FIGURES.get(record.command)
             if draw is not None:
@@ -70,7 +71,7 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike | None =
 
 
 def summary_markdown(run_dir: Path, stages: list[tuple[Path, StageRecord]],
-                     figures: list[Figure]) -> str:
+                     figures: list[ReportFigure]) -> str:
     """The report's text: stages with their times, the metrics, the figures."""
     lines = [f"# Run {run_dir.name}", "", "| stage | command | wall time (s) |", "|---|---|---|"]
     lines += [f"| {d.name} | {r.command} | {r.seconds:.1f} |" for d, r in stages]
@@ -102,7 +103,7 @@ def _events(mcap: Path, topic: str) -> list[tuple[float, str]]:
     return [(ns / 1e9, message["event"]) for ns, message in read_mcap_topic(mcap, topic)]
 
 
-def _contact_figures(stage_dir: Path, out: Path, command: str) -> tuple[dict, object]:
+def _contact_figure(stage_dir: Path, command: str) -> tuple[dict, object]:
     """Height and |F| over the run of an adapt or replay stage."""
     from wipelab.pipeline.figures import force_profile_figure
 
@@ -124,7 +125,7 @@ def _contact_figures(stage_dir: Path, out: Path, command: str) -> tuple[dict, ob
     return metrics, figure
 
 
-def _learn_figures(stage_dir: Path, out: Path) -> list[Figure]:
+def _learn_figures(stage_dir: Path, out: Path) -> list[ReportFigure]:
     from wipelab.pipeline.figures import frequency_figure, waveform_figure
 
     mcap = stage_dir / "learn.mcap"
@@ -142,10 +143,10 @@ def _learn_figures(stage_dir: Path, out: Path) -> list[Figure]:
                           np.column_stack([w["learned"] for w in waveforms]), dofs,
                           1.0 / model["frequency_hz"]),
           out / files[1])
-    return [Figure(files[0], f"{stage_dir.name}: frequency adaptation of the canonical system "
-                             f"and the chosen fundamental (cf. paper Fig. 4)"),
-            Figure(files[1], f"{stage_dir.name}: demonstrated movement (blue) and the learned "
-                             f"waveform (red) per DOF (cf. paper Fig. 5)")]
+    return [ReportFigure(files[0], f"{stage_dir.name}: frequency adaptation of the canonical "
+                                   f"system and the chosen fundamental (cf. paper Fig. 4)"),
+            ReportFigure(files[1], f"{stage_dir.name}: demonstrated movement (blue) and the "
+                                   f"learned waveform (red) per DOF (cf. paper Fig. 5)")]
 
 
 def _demo_frequency_hz(run_dir: Path) -> float | None:
@@ -162,35 +163,35 @@ def _demo_frequency_hz(run_dir: Path) -> float | None:
     return None
 
 
-def _adapt_figures(stage_dir: Path, out: Path) -> list[Figure]:
-    metrics, figure = _contact_figures(stage_dir, out, "adapt")
+def _adapt_figures(stage_dir: Path, out: Path) -> list[ReportFigure]:
+    metrics, figure = _contact_figure(stage_dir, "adapt")
     name = f"{stage_dir.name}_height_force.png"
     _save(figure, out / name)
     surface = metrics.get("surface", {}).get("name", "?")
-    return [Figure(name, f"{stage_dir.name}: tool height and |F| while learning the force "
-                         f"profile of '{surface}'; dashed line: end of learning (cf. paper "
-                         f"Figs. 6-7)")]
+    return [ReportFigure(name, f"{stage_dir.name}: tool height and |F| while learning the "
+                               f"force profile of '{surface}'; dashed line: end of learning "
+                               f"(cf. paper Figs. 6-7)")]
 
 
-def _replay_figures(stage_dir: Path, out: Path) -> list[Figure]:
+def _replay_figures(stage_dir: Path, out: Path) -> list[ReportFigure]:
     from wipelab.pipeline.figures import force_error_bars_figure
 
-    metrics, figure = _contact_figures(stage_dir, out, "replay")
+    metrics, figure = _contact_figure(stage_dir, "replay")
     names = [f"{stage_dir.name}_height_force.png", f"{stage_dir.name}_force_error.png"]
     _save(figure, out / names[0])
-    rms = {scale: {mode: values["rms_force_error_n"] for mode, values in modes.items()}
+    rms = {scale: {mode: values.get("rms_force_error_n", np.nan) for mode, values in modes.items()}
            for scale, modes in metrics["scales"].items()}
     surface = metrics.get("surface", {}).get("name", "?")
     _save(force_error_bars_figure(rms, f"{stage_dir.name}: force error on '{surface}' as the "
                                        f"frequency rises"), out / names[1])
-    return [Figure(names[0], f"{stage_dir.name}: the adapted movement replayed at higher "
-                             f"frequencies, per mode (shaded)"),
-            Figure(names[1], f"{stage_dir.name}: RMS(|F| - F0) per frequency scale and mode: "
-                             f"the learned profile keeps the force as the speed rises")]
+    return [ReportFigure(names[0], f"{stage_dir.name}: the adapted movement replayed at "
+                                   f"higher frequencies, per mode (shaded)"),
+            ReportFigure(names[1], f"{stage_dir.name}: RMS(|F| - F0) per frequency scale and "
+                                   f"mode, as the speed rises")]
 
 
 #: command -> function drawing that stage's figures into the report folder.
-STAGE_FIGURES: dict[str, Callable[[Path, Path], list[Figure]]] = {
+STAGE_FIGURES: dict[str, Callable[[Path, Path], list[ReportFigure]]] = {
     "learn": _learn_figures,
     "adapt": _adapt_figures,
     "replay": _replay_figures,

@@ -20,6 +20,7 @@ from __future__ import annotations
 import fcntl
 import os
 import shutil
+import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -150,11 +151,12 @@ def _keyed_parameters(pipeline: Pipeline, stage: StageSpec, memo: DigestMemo) ->
 
 
 def _check_options(pipeline: Pipeline, stages: tuple[StageSpec, ...]) -> None:
-    """Raise InputError for an option a stage's command does not have (nothing runs yet)."""
-    from wipelab.pipeline.invoke import build_argv, stage_command
+    """Raise InputError for an option a stage's command does not have or a value it cannot
+    parse, before any stage runs."""
+    from wipelab.pipeline.invoke import check_arguments, stage_command
 
     for stage in stages:
-        build_argv(stage, stage_command(stage.command), None, stage.name, False, pipeline.source)
+        check_arguments(stage, stage_command(stage.command), pipeline.source)
 
 
 def _execute(pipeline: Pipeline, stage: StageSpec, input_arg: str | None, stage_dir: Path,
@@ -203,11 +205,17 @@ def _locked(run_dir: Path) -> Iterator[None]:
         yield
 
 
+#: The working directory belongs to the process: runs in threads of one process (a Dask
+#: worker with several threads) take turns.
+_WORKING_DIRECTORY_LOCK = threading.Lock()
+
+
 @contextmanager
 def _working_directory(path: Path) -> Iterator[None]:
-    previous = os.getcwd()
-    os.chdir(path)
-    try:
-        yield
-    finally:
-        os.chdir(previous)
+    with _WORKING_DIRECTORY_LOCK:
+        previous = os.getcwd()
+        os.chdir(path)
+        try:
+            yield
+        finally:
+            os.chdir(previous)

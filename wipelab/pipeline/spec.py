@@ -56,6 +56,9 @@ STAGE_COMMANDS: Mapping[str, CommandSignature] = {
     "replay": CommandSignature(takes_input=True, output_option=True, output_file=None),
 }
 
+#: Folder of the run directory where ``wipelab report`` writes; no stage may take its name.
+REPORT_DIR = "report"
+
 #: Keys of a stage table that are not command options.
 STAGE_KEYS = ("command", "input", "output")
 
@@ -78,7 +81,7 @@ class StageSpec:
         Reference to its input (see :meth:`Pipeline.resolve_input`); None for ``synth``.
     output : str or None
         File name of the output inside the stage folder, for commands that write one file.
-    parameters : dict[str, scalar or list of scalars]
+    parameters : dict[str, scalar, list of scalars or {"file": absolute path}]
         Command options by name (``frequency_scale`` or ``frequency-scale``).
     """
 
@@ -244,8 +247,9 @@ def load_pipeline(path: str | os.PathLike) -> Pipeline:
     for name, table in stage_tables.items():
         table = _table(table, source, f"[stages.{name}]")
         stage = _stage_from_table(_checked_name(name, source, "stage"), table, source, base_dir)
-        if stage.name in inputs:
-            raise InputError(f"{source}: stage {name!r} has the name of an input")
+        if stage.name in inputs or stage.name == REPORT_DIR:
+            raise InputError(f"{source}: stage {name!r}: name taken (by an input or by "
+                             f"RUN_DIR/{REPORT_DIR}, where `wipelab report` writes)")
         stages.append(stage)
     pipeline = Pipeline(source=source, base_dir=base_dir,
                         name=str(header.get("name", path.stem)),

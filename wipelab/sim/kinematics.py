@@ -1,4 +1,4 @@
-"""Forward kinematics and Jacobians of a serial chain read from URDF, in pure numpy.
+"""Forward kinematics and Jacobians of a serial chain read from URDF (numpy, numba kernels).
 
 Used by the IK (fast, no simulator round trips) and checked against PyBullet and a second
 URDF parser in the tests. Frames: poses are 4x4 homogeneous matrices mapping child-frame
@@ -12,6 +12,7 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 
 def rotation_from_rpy(rpy) -> np.ndarray:
@@ -41,25 +42,31 @@ def rpy_from_rotation(rotation: np.ndarray) -> tuple[float, float, float]:
     return roll, pitch, yaw
 
 
+def quaternions_xyzw_from_rotations(rotations: np.ndarray) -> np.ndarray:
+    """Rotation matrices (n, 3, 3) -> unit quaternions (n, 4) (x, y, z, w), w >= 0 (PyBullet
+    order). Shepperd's method: each row uses the best-conditioned of its four formulas."""
+    m = np.asarray(rotations, dtype=float).reshape(-1, 3, 3)
+    m00, m11, m22 = m[:, 0, 0], m[:, 1, 1], m[:, 2, 2]
+    trace = m00 + m11 + m22
+    branch = np.where(trace > 0, 0, np.where((m00 > m11) & (m00 > m22), 1,
+                                             np.where(m11 > m22, 2, 3)))
+    s = 2.0 * np.sqrt(np.maximum(np.choose(branch, [trace + 1.0, 1.0 + m00 - m11 - m22,
+                                                    1.0 + m11 - m00 - m22,
+                                                    1.0 + m22 - m00 - m11]), 1e-300))
+    a, b, c = m[:, 2, 1] - m[:, 1, 2], m[:, 0, 2] - m[:, 2, 0], m[:, 1, 0] - m[:, 0, 1]
+    d, e, f = m[:, 0, 1] + m[:, 1, 0], m[:, 0, 2] + m[:, 2, 0], m[:, 1, 2] + m[:, 2, 1]
+    quarter = s / 4
+    q = np.stack([np.choose(branch, [a / s, quarter, d / s, e / s]),
+                  np.choose(branch, [b / s, d / s, quarter, f / s]),
+                  np.choose(branch, [c / s, e / s, f / s, quarter]),
+                  np.choose(branch, [quarter, a / s, b / s, c / s])], axis=1)
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    return np.where(q[:, 3:] < 0, -q, q)
+
+
 def quaternion_xyzw_from_rotation(rotation: np.ndarray) -> np.ndarray:
     """Rotation matrix (3, 3) -> unit quaternion (x, y, z, w), w >= 0 (PyBullet order)."""
-    m = rotation
-    trace = m[0, 0] + m[1, 1] + m[2, 2]
-    if trace > 0:
-        s = 2.0 * np.sqrt(trace + 1.0)
-        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        q = [s / 4, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s]
-    elif m[1, 1] > m[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-        q = [(m[0, 1] + m[1, 0]) / s, s / 4, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s]
-    else:
-        s = 2.0 * np.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-        q = [(m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, s / 4, (m[1, 0] - m[0, 1]) / s]
-    q = np.asarray(q)
-    q /= np.linalg.norm(q)
-    return -q if q[3] < 0 else q
+    return quaternions_xyzw_from_rotations(rotation)[0]
 
 
 def rotation_from_quaternion_xyzw(q) -> np.ndarray:
@@ -70,16 +77,18 @@ def rotation_from_quaternion_xyzw(q) -> np.ndarray:
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
+@njit(cache=True)
 def rotation_error(current: np.ndarray, target: np.ndarray) -> np.ndarray:
-    """Axis-angle vector (3,) in the root frame that rotates ``current`` onto ``target``."""
+    """Axis-angle vector (3,) in the root frame that rotates ``current`` onto ``target``
+    (both (3, 3))."""
     delta = target @ current.T
-    angle = np.arccos(np.clip((np.trace(delta) - 1.0) / 2.0, -1.0, 1.0))
+    cosine = min(max((delta[0, 0] + delta[1, 1] + delta[2, 2] - 1.0) / 2.0, -1.0), 1.0)
     axis = np.array([delta[2, 1] - delta[1, 2], delta[0, 2] - delta[2, 0],
                      delta[1, 0] - delta[0, 1]])
-    norm = np.linalg.norm(axis)
+    norm = math.sqrt(axis[0] ** 2 + axis[1] ** 2 + axis[2] ** 2)
     if norm < 1e-12:
         return np.zeros(3)
-    return axis / norm * angle
+    return axis / norm * math.acos(cosine)
 
 
 @dataclass(frozen=True)
@@ -100,11 +109,19 @@ class UrdfJoint:
 
     def transform(self, value: float) -> np.ndarray:
         """Parent-link -> child-link transform (4, 4) at joint value ``value``."""
-        motion = np.eye(4)
+        return self.transforms([value])[0]
+
+    def transforms(self, values) -> np.ndarray:
+        """Parent-link -> child-link transforms (n, 4, 4) at joint values ``values`` (n,)."""
+        values = np.asarray(values, dtype=float).reshape(-1)
+        motion = np.broadcast_to(np.eye(4), (values.size, 4, 4)).copy()
         if self.kind in ("revolute", "continuous"):
-            motion[:3, :3] = rotation_about_axis(self.axis, value)
+            x, y, z = self.axis
+            k = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+            motion[:, :3, :3] += (np.sin(values)[:, None, None] * k
+                                  + (1.0 - np.cos(values))[:, None, None] * (k @ k))
         elif self.kind == "prismatic":
-            motion[:3, 3] = self.axis * value
+            motion[:, :3, 3] = values[:, None] * self.axis
         return self.origin @ motion
 
 
@@ -138,8 +155,8 @@ class KinematicChain:
     """The serial chain from the URDF's root to ``tip``, with some joints held fixed.
 
     Held joints are folded into constant transforms once, so that ``forward`` and
-    ``jacobian`` cost a handful of small matrix products (the IK calls them every control
-    step).
+    ``jacobian`` cost a handful of small matrix products, compiled with numba (the IK calls
+    them every control step).
 
     Parameters
     ----------
@@ -188,53 +205,88 @@ class KinematicChain:
         if order != sorted(order):
             raise ValueError("active joints must be listed from the root to the tip")
         self._tail = pending
-        x, y, z = self._axes.T
-        zero = np.zeros_like(x)
-        self._k = np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1),
-                            np.stack([-y, x, zero], -1)], 1)
-        self._k2 = self._k @ self._k
-        self._revolute = (~self._prismatic).astype(float)
-        self._prismatic = self._prismatic.astype(float)
-        self._identity = np.broadcast_to(np.eye(4), (len(self.active), 4, 4)).copy()
         self.lower = np.array([joints[a].lower for a in self.active])
         self.upper = np.array([joints[a].upper for a in self.active])
-
-    def _motions(self, q: np.ndarray) -> np.ndarray:
-        """Joint motion transforms (n, 4, 4) at ``q`` (Rodrigues for revolute joints)."""
-        motion = self._identity.copy()
-        angle = q * self._revolute
-        s, c = np.sin(angle)[:, None, None], np.cos(angle)[:, None, None]
-        motion[:, :3, :3] += s * self._k + (1.0 - c) * self._k2
-        motion[:, :3, 3] = (q * self._prismatic)[:, None] * self._axes
-        return motion
-
-    def _joint_frames(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Frames (n, 4, 4) of the active joints (before their motion) and the tip's pose."""
-        motions = self._motions(np.asarray(q, dtype=float))
-        frames = np.empty_like(motions)
-        pose = self._before[0]
-        for i in range(len(motions)):
-            if i:
-                pose = pose @ self._before[i]
-            frames[i] = pose
-            pose = pose @ motions[i]
-        return frames, pose @ self._tail
+        #: The chain for the compiled kernels: (before (n, 4, 4), axes (n, 3),
+        #: prismatic (n,) 1.0 / 0.0, tail (4, 4)).
+        self.arrays = (np.ascontiguousarray(self._before), np.ascontiguousarray(self._axes),
+                       self._prismatic.astype(float), np.ascontiguousarray(self._tail))
 
     def forward(self, q) -> np.ndarray:
         """Pose (4, 4) of ``tip`` in the root frame for active joint values ``q`` (n,)."""
-        return self._joint_frames(q)[1]
+        return chain_forward(*self.arrays, np.asarray(q, dtype=float))
 
     def jacobian(self, q) -> tuple[np.ndarray, np.ndarray]:
         """Tip pose (4, 4) and geometric Jacobian (6, n): rows 0-2 linear velocity (m/s per
         unit joint velocity), rows 3-5 angular velocity (rad/s), both in the root frame."""
-        frames, pose = self._joint_frames(q)
-        axes = (frames[:, :3, :3] @ self._axes[:, :, None])[:, :, 0]
-        r = pose[:3, 3] - frames[:, :3, 3]
-        lever = np.empty_like(axes)
-        lever[:, 0] = axes[:, 1] * r[:, 2] - axes[:, 2] * r[:, 1]
-        lever[:, 1] = axes[:, 2] * r[:, 0] - axes[:, 0] * r[:, 2]
-        lever[:, 2] = axes[:, 0] * r[:, 1] - axes[:, 1] * r[:, 0]
-        jac = np.empty((6, len(axes)))
-        jac[:3] = (lever * self._revolute[:, None] + axes * self._prismatic[:, None]).T
-        jac[3:] = (axes * self._revolute[:, None]).T
+        jac = np.empty((6, len(self.active)))
+        pose = chain_jacobian(*self.arrays, np.asarray(q, dtype=float), jac)
         return pose, jac
+
+
+# -- compiled kernels (numba): the IK calls them every control period ------------------------
+
+@njit(cache=True)
+def _joint_motion(axis: np.ndarray, prismatic: float, value: float) -> np.ndarray:
+    """Motion (4, 4) of one joint: Rodrigues' rotation about ``axis`` (3,) or a translation."""
+    motion = np.eye(4)
+    if prismatic:
+        motion[0, 3], motion[1, 3], motion[2, 3] = axis[0] * value, axis[1] * value, \
+            axis[2] * value
+        return motion
+    x, y, z = axis[0], axis[1], axis[2]
+    s, c = math.sin(value), math.cos(value)
+    v = 1.0 - c
+    motion[0, 0], motion[0, 1], motion[0, 2] = c + x * x * v, x * y * v - z * s, x * z * v + y * s
+    motion[1, 0], motion[1, 1], motion[1, 2] = x * y * v + z * s, c + y * y * v, y * z * v - x * s
+    motion[2, 0], motion[2, 1], motion[2, 2] = x * z * v - y * s, y * z * v + x * s, c + z * z * v
+    return motion
+
+
+@njit(cache=True)
+def chain_frames(before, axes, prismatic, tail, q, origins, joint_axes) -> np.ndarray:
+    """Forward kinematics of a chain given as :attr:`KinematicChain.arrays`.
+
+    Fills ``origins`` (n, 3) and ``joint_axes`` (n, 3) with each active joint's position and
+    unit axis in the root frame; returns the tip pose (4, 4).
+    """
+    pose = np.eye(4)
+    for i in range(q.size):
+        pose = pose @ before[i]
+        for r in range(3):
+            origins[i, r] = pose[r, 3]
+            joint_axes[i, r] = (pose[r, 0] * axes[i, 0] + pose[r, 1] * axes[i, 1]
+                                + pose[r, 2] * axes[i, 2])
+        pose = pose @ _joint_motion(axes[i], prismatic[i], q[i])
+    return pose @ tail
+
+
+@njit(cache=True)
+def chain_forward(before, axes, prismatic, tail, q) -> np.ndarray:
+    """Tip pose (4, 4) of a chain given as :attr:`KinematicChain.arrays` at ``q`` (n,)."""
+    n = q.size
+    return chain_frames(before, axes, prismatic, tail, q, np.empty((n, 3)), np.empty((n, 3)))
+
+
+@njit(cache=True)
+def chain_jacobian(before, axes, prismatic, tail, q, jac) -> np.ndarray:
+    """Tip pose (4, 4); fills ``jac`` (6, n) with the geometric Jacobian in the root frame
+    (rows 0-2 linear, 3-5 angular velocity)."""
+    n = q.size
+    origins, joint_axes = np.empty((n, 3)), np.empty((n, 3))
+    pose = chain_frames(before, axes, prismatic, tail, q, origins, joint_axes)
+    for i in range(n):
+        a = joint_axes[i]
+        if prismatic[i]:
+            for r in range(3):
+                jac[r, i] = a[r]
+                jac[3 + r, i] = 0.0
+        else:
+            rx, ry, rz = pose[0, 3] - origins[i, 0], pose[1, 3] - origins[i, 1], \
+                pose[2, 3] - origins[i, 2]
+            jac[0, i] = a[1] * rz - a[2] * ry
+            jac[1, i] = a[2] * rx - a[0] * rz
+            jac[2, i] = a[0] * ry - a[1] * rx
+            for r in range(3):
+                jac[3 + r, i] = a[r]
+    return pose

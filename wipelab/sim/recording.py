@@ -34,7 +34,8 @@ from wipelab.control.force_profile import COMPARISON_PHASES
 from wipelab.learning import PeriodicModel
 from wipelab.logs import StageRecorder
 from wipelab.sim.armar3 import RIGHT_ARM_JOINTS, TORSO_JOINTS, armar3b_urdf_path
-from wipelab.sim.kinematics import parse_urdf_joints, quaternion_xyzw_from_rotation
+from wipelab.sim.kinematics import (parse_urdf_joints, quaternion_xyzw_from_rotation,
+                                    quaternions_xyzw_from_rotations)
 from wipelab.sim.path import PATH_PHASES, dof_waveform
 
 #: Rate (Hz) of the 3D scene in the logs (poses, /tf, force arrow).
@@ -108,23 +109,26 @@ def _log_static_scene(rec: StageRecorder, task, t0: float) -> None:
 
 
 def _log_poses(rec: StageRecorder, stage: str, task, trace: dict) -> None:
+    """The 3D scene at :data:`POSE_RATE_HZ`: /tf of the moving joints and the sponge, the TCP
+    poses and the force arrow, each as one series."""
     urdf_joints = parse_urdf_joints(armar3b_urdf_path().read_text())
-    active = [urdf_joints[name] for name in TORSO_JOINTS + RIGHT_ARM_JOINTS]
-    t = trace["t"]
     every = max(1, int(round(1.0 / (POSE_RATE_HZ * task.world.config.dt))))
-    for k in range(0, len(t), every):
-        transforms = []
-        for joint, value in zip(active, trace["q"][k]):
-            translation, quaternion = _transform(joint.transform(value))
-            transforms.append((joint.parent, joint.child, translation, quaternion))
-        transforms.append(("world", "sponge", trace["sponge_pos"][k], trace["sponge_quat"][k]))
-        rec.transforms(t[k], transforms)
-        rec.pose(f"/{stage}/tcp_commanded", t[k], "world", trace["tcp_cmd"][k],
-                 quaternion_xyzw_from_rotation(trace["tcp_rot"][k]))
-        rec.pose(f"/{stage}/tcp_actual", t[k], "world", trace["tcp"][k],
-                 quaternion_xyzw_from_rotation(trace["tcp_rot"][k]))
-        rec.arrow3d(f"/{stage}/force_arrow", t[k], trace["sponge_pos"][k],
-                    ARROW_SCALE * trace["force"][k])
+    pick = slice(0, len(trace["t"]), every)
+    t = trace["t"][pick]
+    frames = []
+    for name, values in zip(TORSO_JOINTS + RIGHT_ARM_JOINTS, trace["q"][pick].T):
+        joint = urdf_joints[name]
+        poses = joint.transforms(values)
+        frames.append((joint.parent, joint.child, poses[:, :3, 3],
+                       quaternions_xyzw_from_rotations(poses[:, :3, :3])))
+    frames.append(("world", "sponge", trace["sponge_pos"][pick], trace["sponge_quat"][pick]))
+    rec.transform_series(t, frames)
+    tcp_quaternions = quaternions_xyzw_from_rotations(trace["tcp_rot"][pick])
+    rec.pose_series(f"/{stage}/tcp_commanded", t, "world", trace["tcp_cmd"][pick],
+                    tcp_quaternions)
+    rec.pose_series(f"/{stage}/tcp_actual", t, "world", trace["tcp"][pick], tcp_quaternions)
+    rec.arrow_series(f"/{stage}/force_arrow", t, trace["sponge_pos"][pick],
+                     ARROW_SCALE * trace["force"][pick])
 
 
 def _log_series(rec: StageRecorder, stage: str, task, trace: dict, segments) -> None:

@@ -12,8 +12,6 @@ never sees the simulator's true contact forces (the trace keeps them for the met
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 
 from wipelab.control.compliance import (ComplianceIntegrator, ComplianceParams, feedback_force,
@@ -33,9 +31,8 @@ CALIBRATION_RESIDUAL = 0.5
 CALIBRATION_SAMPLES = 12
 
 
-@dataclass
 class Trace:
-    """Per-control-period record of a session (lists while running; :meth:`arrays` at the end).
+    """Per-control-period record of a session (one dict per period; :meth:`arrays` at the end).
 
     Keys and units: t (s); phase (rad); tcp_cmd, tcp (3,) m world; tcp_rot (3, 3) world;
     q_cmd, q (10,) rad (torso + right arm); force (3,) N world (compensated, filtered: what
@@ -45,17 +42,23 @@ class Trace:
     mode (int, caller-defined segment label).
     """
 
-    columns: dict[str, list] = field(default_factory=dict)
+    def __init__(self):
+        self.rows: list[dict] = []
 
     def append(self, **values) -> None:
-        for key, value in values.items():
-            self.columns.setdefault(key, []).append(value)
+        self.rows.append(values)
+
+    def last(self, key: str):
+        """The most recent value of ``key``."""
+        return self.rows[-1][key]
 
     def arrays(self) -> dict[str, np.ndarray]:
-        return {key: np.asarray(value) for key, value in self.columns.items()}
+        if not self.rows:
+            return {}
+        return {key: np.asarray([row[key] for row in self.rows]) for key in self.rows[0]}
 
     def __len__(self) -> int:
-        return len(self.columns.get("t", []))
+        return len(self.rows)
 
 
 class SafetyStop(Exception):
@@ -131,7 +134,7 @@ class WipingSession:
         """Move the TCP in a straight line (smooth in time) to ``position`` (3,) in free air
         (no compliance; the safety limit is watched once the payload is known)."""
         start = (self.world.tcp_pose()[0] if not len(self.trace)
-                 else np.asarray(self.trace.columns["tcp_cmd"][-1], dtype=float))
+                 else np.asarray(self.trace.last("tcp_cmd"), dtype=float))
         goal = np.asarray(position, dtype=float)
         n = max(1, int(round(seconds / self.dt)))
         for k in range(1, n + 1):
@@ -189,20 +192,23 @@ class WipingSession:
 
     def _command_and_step(self, target: np.ndarray, z_ref: float, phase: float,
                           mode: int) -> StepResult:
-        self.q_arm = self.tracker.step(self.q_arm, target)
-        self.world.command(np.concatenate([self.torso, self.q_arm]))
+        q_arm = self.tracker.step(self.q_arm, target)
+        velocity = (q_arm - self.q_arm) / self.dt
+        self.q_arm = q_arm
+        self.world.command(np.concatenate([self.torso, q_arm]),
+                           np.concatenate([np.zeros(self.torso.size), velocity]))
         result = self.world.step()
         self.last = result
-        tcp, rotation = self.world.tcp_pose()
-        sponge_pos, sponge_quat = self.world.sponge_pose()
         self.trace.append(
-            t=self.world.time, phase=phase, tcp_cmd=target, tcp=tcp,
-            tcp_rot=rotation, q_cmd=np.concatenate([self.torso, self.q_arm]), q=result.q,
+            t=self.world.time, phase=phase, tcp_cmd=target, tcp=result.tcp,
+            tcp_rot=result.tcp_rotation, q_cmd=np.concatenate([self.torso, self.q_arm]),
+            q=result.q,
             force=self.force, wrench=result.wrench,
             feedback=feedback_force(self.force, self.compliance.feedback), z_ref=z_ref,
             z_offset=self.integrator.offset_, vz=self.integrator.velocity_,
             sponge_force=result.sponge_force, hand_force=result.hand_force,
-            compression=result.compression, sponge_pos=sponge_pos, sponge_quat=sponge_quat,
+            compression=result.compression, sponge_pos=result.sponge_position,
+            sponge_quat=result.sponge_quaternion,
             mode=mode)
         return result
 
@@ -215,8 +221,8 @@ class WipingSession:
 
     def _retract(self, mode: int) -> None:
         """Safe stop: hold x-y and move the tool up at the velocity cap for 0.5 s."""
-        target = np.asarray(self.trace.columns["tcp_cmd"][-1], dtype=float).copy()
-        phase = self.trace.columns["phase"][-1]   # the movement stops: the phase is frozen
+        target = np.asarray(self.trace.last("tcp_cmd"), dtype=float).copy()
+        phase = self.trace.last("phase")   # the movement stops: the phase is frozen
         for _ in range(int(round(0.5 / self.dt))):
             target[2] += self.compliance.max_speed * self.dt
             self.force = self.sense()

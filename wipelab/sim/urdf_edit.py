@@ -1,8 +1,10 @@
-"""Edits of a URDF document for simulation: hold joints fixed, attach a compliant tool.
+"""Edits of a URDF document for simulation: hold joints fixed, keep a subtree, attach a
+compliant tool.
 
 Pure XML (``xml.etree``); the shipped URDF stays as it is and the simulator loads an edited
-copy. Holding the joints a task does not use as ``fixed`` makes PyBullet's multibody several
-times cheaper to step (no motors, no limits to solve for them).
+copy. Holding the joints a task does not use as ``fixed`` and leaving out the links that
+cannot move makes PyBullet's multibody several times cheaper to step (no motors, no limits,
+fewer links to propagate).
 """
 
 from __future__ import annotations
@@ -65,26 +67,40 @@ def drop_subtrees(urdf_text: str, joints) -> str:
     return ET.tostring(root, encoding="unicode")
 
 
+def subtree(urdf_text: str, root_link: str) -> str:
+    """Keep ``root_link`` and everything below it; it becomes the document's root link."""
+    root = ET.fromstring(urdf_text)
+    children: dict[str, list[str]] = {}
+    for element in root.findall("joint"):
+        children.setdefault(element.find("parent").get("link"), []).append(
+            element.find("child").get("link"))
+    kept, stack = set(), [root_link]
+    while stack:
+        link = stack.pop()
+        kept.add(link)
+        stack += children.get(link, [])
+    for element in list(root):
+        if ((element.tag == "link" and element.get("name") not in kept)
+                or (element.tag == "joint" and element.find("parent").get("link") not in kept)):
+            root.remove(element)
+    return ET.tostring(root, encoding="unicode")
+
+
 def attach_compliant_box(urdf_text: str, parent_link: str, mount: np.ndarray, name: str,
                          size, mass: float, max_compression: float, spheres: np.ndarray,
                          sphere_radius: float, rgba=(0.95, 0.8, 0.1, 1.0)) -> str:
     """Attach a box tool on a prismatic joint along its own z axis.
 
-    ``<name>_mount`` (fixed, pose ``mount`` (4, 4) of the tool frame at rest in
-    ``parent_link``'s frame) -> ``<name>_holder`` -> ``<name>_compression`` (prismatic along
-    +z of the tool frame, 0 at rest, positive = compressed toward the holder, up to
-    ``max_compression`` m) -> ``<name>`` (the box of ``size`` (3,) m and ``mass`` kg,
-    centred on the tool frame; its collision shape is the spheres of ``sphere_radius`` (m)
-    at ``spheres`` (k, 3)). The simulator makes the prismatic joint a spring.
+    ``<name>_compression`` (prismatic from ``parent_link``, origin ``mount`` (4, 4): the tool
+    frame at rest in ``parent_link``'s frame; along +z of the tool frame, 0 at rest, positive
+    = compressed toward the parent, up to ``max_compression`` m) -> ``<name>`` (the box of
+    ``size`` (3,) m and ``mass`` kg, centred on the tool frame; its collision shape is the
+    spheres of ``sphere_radius`` (m) at ``spheres`` (k, 3)). The simulator makes the
+    prismatic joint a spring.
     """
     root = ET.fromstring(urdf_text)
     sx, sy, sz = size
     inertia = mass / 12.0 * np.array([sy * sy + sz * sz, sx * sx + sz * sz, sx * sx + sy * sy])
-    holder = ET.SubElement(root, "link", name=f"{name}_holder")
-    inertial = ET.SubElement(holder, "inertial")
-    ET.SubElement(inertial, "mass", value="1e-05")
-    ET.SubElement(inertial, "inertia", ixx="1e-09", ixy="0", ixz="0", iyy="1e-09", iyz="0",
-                  izz="1e-09")
     tool = ET.SubElement(root, "link", name=name)
     inertial = ET.SubElement(tool, "inertial")
     ET.SubElement(inertial, "mass", value=f"{mass:.9g}")
@@ -98,15 +114,11 @@ def attach_compliant_box(urdf_text: str, parent_link: str, mount: np.ndarray, na
         collision = ET.SubElement(tool, "collision")
         ET.SubElement(collision, "origin", xyz=_fmt(centre), rpy="0 0 0")
         ET.SubElement(ET.SubElement(collision, "geometry"), "sphere", radius=f"{sphere_radius:.9g}")
-    mount_joint = ET.SubElement(root, "joint", name=f"{name}_mount", type="fixed")
-    ET.SubElement(mount_joint, "parent", link=parent_link)
-    ET.SubElement(mount_joint, "child", link=f"{name}_holder")
-    ET.SubElement(mount_joint, "origin", xyz=_fmt(mount[:3, 3]),
-                  rpy=_fmt(rpy_from_rotation(mount[:3, :3])))
     slide = ET.SubElement(root, "joint", name=f"{name}_compression", type="prismatic")
-    ET.SubElement(slide, "parent", link=f"{name}_holder")
+    ET.SubElement(slide, "parent", link=parent_link)
     ET.SubElement(slide, "child", link=name)
-    ET.SubElement(slide, "origin", xyz="0 0 0", rpy="0 0 0")
+    ET.SubElement(slide, "origin", xyz=_fmt(mount[:3, 3]),
+                  rpy=_fmt(rpy_from_rotation(mount[:3, :3])))
     ET.SubElement(slide, "axis", xyz="0 0 1")
     ET.SubElement(slide, "limit", lower=f"{-0.1 * max_compression:.9g}",
                   upper=f"{max_compression:.9g}", effort="1000", velocity="10")

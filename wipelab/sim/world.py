@@ -20,7 +20,7 @@ import tempfile
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet
+from wipelab.sim.bullet import pybullet
 
 from wipelab.sim.armar3 import (PLATFORM_JOINTS, RIGHT_ARM_JOINTS, TCP_OFFSET, TORSO_JOINTS,
                                 armar3b_urdf_path)
@@ -95,6 +95,10 @@ class StepResult:
     sponge_force: float            # N: true total normal force surface -> sponge (period mean)
     hand_force: float              # N: same for any robot link but the sponge
     compression: float             # m: true sponge compression
+    tcp: np.ndarray                # (3,) actual TCP position (m, world)
+    tcp_rotation: np.ndarray       # (3, 3) actual TCP orientation in the world
+    sponge_position: np.ndarray    # (3,) sponge centre (m, world)
+    sponge_quaternion: np.ndarray  # (4,) sponge orientation (x, y, z, w)
 
 
 def surface_body(client: int, surface: Surface) -> int:
@@ -198,6 +202,7 @@ class SimWorld:
         self.ft_joint = by_name[FT_JOINT]
         self.hand_link = by_name["link:hand_r"]
         self.tcp_link = by_name["link:tcp_r"]
+        self._pose_links = [self.hand_link, self.tcp_link, self.sponge_link]
         joints = parse_urdf_joints(self.urdf_text)
         self.effort = np.array([joints[n].effort for n in ACTIVE_JOINTS])
         pybullet.changeDynamics(self.robot, self.sponge_link, lateralFriction=surface.friction,
@@ -229,12 +234,15 @@ class SimWorld:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def command(self, q) -> None:
-        """Joint position targets (10,) (rad), ACTIVE_JOINTS order."""
+    def command(self, q, velocity=None) -> None:
+        """Joint position targets (10,) (rad), ACTIVE_JOINTS order, with the joint velocities
+        (10,) (rad/s) of the commanded motion as feed-forward (zero if None): the joint
+        servos then follow a moving target without the lag of a pure position loop."""
         self.targets = np.asarray(q, dtype=float).copy()
+        velocity = [0.0] * len(q) if velocity is None else np.asarray(velocity, float).tolist()
         pybullet.setJointMotorControlArray(self.robot, self.joint_ids, pybullet.POSITION_CONTROL,
                                            targetPositions=self.targets.tolist(),
-                                           targetVelocities=[0.0] * len(q),
+                                           targetVelocities=velocity,
                                            forces=self.effort.tolist(),
                                            positionGains=[0.5] * len(q),
                                            velocityGains=[1.0] * len(q),
@@ -242,15 +250,15 @@ class SimWorld:
 
     def step(self) -> StepResult:
         """Run one control period of physics; return the measurements at its end."""
-        c, robot = self.client, self.robot
+        c, robot, sponge_joint, ft_joint = self.client, self.robot, self.sponge_joint, self.ft_joint
         k, damping = self.sponge.stiffness, self.sponge.damping
-        wrench = np.zeros(6)
+        wrench = [0.0] * 6
         sponge_force = hand_force = 0.0
         n = self.config.substeps
         for _ in range(n):
-            position, velocity = pybullet.getJointState(robot, self.sponge_joint,
+            position, velocity = pybullet.getJointState(robot, sponge_joint,
                                                         physicsClientId=c)[:2]
-            pybullet.setJointMotorControl2(robot, self.sponge_joint, pybullet.TORQUE_CONTROL,
+            pybullet.setJointMotorControl2(robot, sponge_joint, pybullet.TORQUE_CONTROL,
                                            force=-k * position - damping * velocity,
                                            physicsClientId=c)
             if self.external_force.any():
@@ -258,21 +266,24 @@ class SimWorld:
                 pybullet.applyExternalForce(robot, self.sponge_link, self.external_force.tolist(),
                                             centre, pybullet.WORLD_FRAME, physicsClientId=c)
             pybullet.stepSimulation(physicsClientId=c)
-            wrench += pybullet.getJointState(robot, self.ft_joint, physicsClientId=c)[2]
+            reaction = pybullet.getJointState(robot, ft_joint, physicsClientId=c)[2]
+            wrench = [a + b for a, b in zip(wrench, reaction)]
             for point in pybullet.getContactPoints(robot, self.surface_id, physicsClientId=c):
                 if point[3] == self.sponge_link:
                     sponge_force += point[9]
                 else:
                     hand_force += point[9]
         self.time += self.config.dt
-        states = pybullet.getJointStates(robot, self.joint_ids + [self.sponge_joint],
+        states = pybullet.getJointStates(robot, self.joint_ids + [sponge_joint],
                                          physicsClientId=c)
-        hand = pybullet.getLinkState(robot, self.hand_link, physicsClientId=c)
+        hand, tcp, sponge = pybullet.getLinkStates(robot, self._pose_links, physicsClientId=c)
         return StepResult(q=np.array([s[0] for s in states[:-1]]),
-                          wrench=self.imperfections(self.reading_convention(wrench / n)),
+                          wrench=self.imperfections(self.reading_convention(np.array(wrench) / n)),
                           sensor_rotation=_matrix(hand[5]),
                           sponge_force=sponge_force / n, hand_force=hand_force / n,
-                          compression=float(states[-1][0]))
+                          compression=float(states[-1][0]),
+                          tcp=np.array(tcp[4]), tcp_rotation=_matrix(tcp[5]),
+                          sponge_position=np.array(sponge[4]), sponge_quaternion=np.array(sponge[5]))
 
     @staticmethod
     def reading_convention(reaction: np.ndarray) -> np.ndarray:
@@ -284,9 +295,3 @@ class SimWorld:
         """Actual TCP position (3,) (m) and orientation (3, 3) in the world."""
         state = pybullet.getLinkState(self.robot, self.tcp_link, physicsClientId=self.client)
         return np.array(state[4]), _matrix(state[5])
-
-    def sponge_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """Actual sponge centre (3,) (m) and orientation quaternion (x, y, z, w) in the world."""
-        state = pybullet.getLinkState(self.robot, self.sponge_link, physicsClientId=self.client)
-        return np.array(state[4]), np.array(state[5])
-

@@ -127,7 +127,7 @@ def _learn(task: WipingTask, model: PeriodicModel, params: AdaptParams, quiet: b
                 xy, acceleration = path.step(omega, dt)
                 session.tick(xy, task.start_height, True, path.phase,
                              np.append(acceleration, 0.0), LEARN)
-                learner.update(session.trace.columns["tcp_cmd"][-1][2], path.phase, omega)
+                learner.update(session.trace.last("tcp_cmd")[2], path.phase, omega)
                 bar.update()
                 if path.phase >= period_end:
                     period_end += 2.0 * math.pi
@@ -138,7 +138,7 @@ def _learn(task: WipingTask, model: PeriodicModel, params: AdaptParams, quiet: b
             segments.append(Segment("learned profile", HOLD, session.time))
             adapted = adapted_model(model, learner, {}, None)
             replay = PathGenerator(adapted, ("x", "y", "z"), phase=path.phase)
-            z_now = session.trace.columns["tcp_cmd"][-1][2]
+            z_now = session.trace.last("tcp_cmd")[2]
             # continuity at the switch: compliance keeps the small difference and corrects it
             session.integrator.offset_ = z_now - replay.position[2]
             hold_end = path.phase + 2.0 * math.pi * params.hold_periods

@@ -142,7 +142,7 @@ def _run_one(task: WipingTask, model: PeriodicModel, omega: float, mode: str, la
     end = session.time
     session.integrator.offset_ = 0.0
     if stop is None:
-        tcp = session.trace.columns["tcp_cmd"][-1]
+        tcp = session.trace.last("tcp_cmd")
         session.move_to([tcp[0], tcp[1], task.start_height + 0.03], 0.5, mode=MOVE)
     return RunResult(0.0, mode, motion_start, score_from, end, planned, stop)
 

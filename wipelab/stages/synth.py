@@ -103,7 +103,7 @@ def _demo_toml(params: SynthParams, frame_count: int, occlusions) -> str:
     synth = {"pattern": params.pattern, "frequency_hz": params.frequency_hz,
              "duration": params.duration, "seed": params.seed,
              "amplitude": params.amplitude or DEFAULT_AMPLITUDE[params.pattern],
-             "occlusions_hidden": [[e.t_full, e.t_clear] for e in occlusions]}
+             "free_hand_passes": [[e.t_in, e.t_out] for e in occlusions]}
     lines = ["# wipelab demonstration metadata"]
     lines += [f"{key} = {_toml_value(value)}" for key, value in top.items()]
     lines += ["", "[synth]"] + [f"{key} = {_toml_value(value)}" for key, value in synth.items()]

@@ -164,7 +164,7 @@ def load_calibration(path: str | os.PathLike) -> StereoCalibration:
         raise InputError(f"{name}: file not found")
     try:
         fs = cv2.FileStorage(name, cv2.FILE_STORAGE_READ)
-    except cv2.error:
+    except (cv2.error, SystemError):  # OpenCV's parser errors surface as either
         raise InputError(f"{name}: not an OpenCV FileStorage file (YAML/XML/JSON)") from None
     if not fs.isOpened():
         raise InputError(f"{name}: not an OpenCV FileStorage file (YAML/XML/JSON)")

@@ -135,8 +135,8 @@ class ColourModel:
         """Sponge probability per pixel, float32 in [0, 1], shape (h, w)."""
         hsv = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2HSV)
         probability = cv2.calcBackProject([hsv], [0, 1], self._hist, [0, 180, 0, 256], 1.0)
-        probability[hsv[..., 2] < self.v_min] = 0
-        return probability.astype(np.float32) * np.float32(1.0 / 255.0)
+        bright = cv2.inRange(hsv, (0, 0, self.v_min), (180, 255, 255))
+        return np.multiply(cv2.bitwise_and(probability, bright), 1.0 / 255.0, dtype=np.float32)
 
 
 @dataclass(frozen=True)

@@ -42,7 +42,7 @@ def newton_step(gradient: np.ndarray, hessian: np.ndarray, scale: np.ndarray,
 def refine_pose(derivatives: Callable[[np.ndarray], tuple[float, np.ndarray, np.ndarray]],
                 score: Callable[[np.ndarray], np.ndarray], start: np.ndarray,
                 scale: np.ndarray, iterations: int = 6, max_step: float = 4.0,
-                tolerance: float = 0.05) -> tuple[np.ndarray, float]:
+                tolerance: float = 0.1) -> tuple[np.ndarray, float]:
     """Maximise a score near ``start`` by damped Newton steps.
 
     Parameters
@@ -59,7 +59,7 @@ def refine_pose(derivatives: Callable[[np.ndarray], tuple[float, np.ndarray, np.
     max_step : float
         Largest step per axis.
     tolerance : float
-        Stop when every component of a step is below this.
+        Stop when every component of the next step is below this.
 
     Returns
     -------
@@ -73,6 +73,8 @@ def refine_pose(derivatives: Callable[[np.ndarray], tuple[float, np.ndarray, np.
     for _ in range(iterations):
         value, gradient, hessian = derivatives(pose)
         step = newton_step(gradient, hessian, scale, max_step)
+        if np.all(np.abs(step) < tolerance * scale):  # converged: no need to try the step
+            break
         # fall back on plain gradient steps where the quadratic model is poor
         climb = gradient * scale ** 2
         climb /= max(np.max(np.abs(climb / scale)), 1e-300)

@@ -33,12 +33,13 @@ def sample_bilinear(image: np.ndarray, uv: np.ndarray, border_value: float = 0.0
     flat = uv.reshape(-1, 2)
     n = len(flat)
     rows = max(1, -(-n // _ROW))
-    padded = np.full((rows * _ROW, 2), -1e6, np.float32)
+    columns = min(max(n, 1), _ROW)
+    padded = np.full((rows * columns, 2), -1e6, np.float32)
     padded[:n] = flat
     if not np.isfinite(padded.sum()):  # cv2.remap is undefined for NaN coordinates
         padded[~np.isfinite(padded)] = -1e6
     border = cv2.BORDER_REFLECT if reflect else cv2.BORDER_CONSTANT
-    values = cv2.remap(image, padded.reshape(rows, _ROW, 2), None, cv2.INTER_LINEAR,
+    values = cv2.remap(image, padded.reshape(rows, columns, 2), None, cv2.INTER_LINEAR,
                        borderMode=border, borderValue=border_value)
     channels = image.shape[2:] if image.ndim == 3 else ()
-    return values.reshape((rows * _ROW,) + channels)[:n].reshape(lead + channels)
+    return values.reshape((rows * columns,) + channels)[:n].reshape(lead + channels)

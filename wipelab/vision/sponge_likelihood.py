@@ -1,32 +1,33 @@
-"""How well a sponge pose explains a pair of colour back-projections.
+"""How well a sponge pose explains a pair of camera images.
 
 A pose is (x, y, z, yaw): the box centre in the tracking frame and its rotation about the
 table normal. For each camera, the box's silhouette edges (edges between a face turned
 towards the camera and one turned away) are sampled; points just inside the box along each
-edge's outward normal ``(n1 + n2) / sqrt(2)`` should be sponge-coloured and points just
-outside should not. Both kinds of points are projected through the calibration, lens
-distortion included, and read from the back-projection (bilinear). Per camera:
+edge's outward normal ``(n1 + n2) / sqrt(2)`` should look like sponge and points just
+outside should not. The points are projected into a window of the camera's undistorted
+image (:mod:`wipelab.vision.undistortion`) and read bilinearly. Per camera:
 
-* ``contrast`` = mean(p_inside - p_outside) over the silhouette samples, in [-1, 1]: peaks
-  when the model's outline lies on the sponge's outline (also under motion blur, which
-  smears the outline symmetrically) and does not care about parts hidden by the hand,
-  which read 0 inside and outside alike;
-* ``coverage`` = mean p over points inside the faces turned towards the camera, in [0, 1]:
-  how much of the sponge is seen; it drops to 0 when the sponge is hidden.
+* ``contrast`` = mean(inside - outside) over the silhouette samples: peaks when the model's
+  outline lies on the sponge's outline (also under motion blur, which smears the outline
+  symmetrically) and does not care about parts hidden by the hand, which read alike inside
+  and outside;
+* ``coverage`` = mean value at points inside the faces turned towards the camera: how much
+  of the sponge is seen (on the back-projection, in [0, 1]); it drops to 0 when the sponge
+  is hidden.
 
-Everything is numpy over (poses x samples) arrays; the tracker scores hundreds of poses per
-frame.
+The particle filter reads the histogram back-projection (a probability); the refinement
+(:class:`LinearisedContrast`) reads a linear colour feature, whose blurred edges stay
+centred on the true outline. Everything is numpy over (poses x samples) arrays.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
-from wipelab.vision.projection import project_points
 from wipelab.vision.sampling import sample_bilinear
+from wipelab.vision.undistortion import pinhole
 from wipelab.vision.sponge_box import EDGE_FACES, EDGES, FACE_NORMALS, SpongeBox
 
 
@@ -197,60 +198,6 @@ class ViewImage:
     t_cam_track: np.ndarray
 
 
-class Undistorter:
-    """Resample windows of a camera's frames into an undistorted (pinhole) image.
-
-    The undistorted canvas is large enough to hold every pixel of the distorted frame (a
-    wide-angle lens's corners land outside the frame's own rectangle); its camera matrix
-    ``K`` is the camera's with the principal point moved accordingly.
-
-    Parameters
-    ----------
-    K, D : ndarray
-        Camera matrix and distortion.
-    size : tuple of int
-        (width, height) of the frames.
-    """
-
-    def __init__(self, K: np.ndarray, D: np.ndarray, size: tuple[int, int]):
-        width, height = size
-        edge = np.concatenate([np.column_stack([np.linspace(0, width - 1, 64), np.full(64, y)])
-                               for y in (0, height - 1)]
-                              + [np.column_stack([np.full(48, x), np.linspace(0, height - 1, 48)])
-                                 for x in (0, width - 1)])
-        rays = cv2.undistortPoints(edge.reshape(-1, 1, 2), K, D).reshape(-1, 2)
-        ideal = rays @ K[:2, :2].T + K[:2, 2]
-        low = np.floor(np.minimum(ideal.min(axis=0), 0.0)) - 1
-        high = np.ceil(np.maximum(ideal.max(axis=0), [width - 1, height - 1])) + 1
-        self.K = K.copy()
-        self.K[:2, 2] -= low
-        self.size = tuple(int(v) for v in np.minimum(high - low + 1, 3 * np.array(size)))
-        self.K_distorted, self.D = K, D
-        self.map_u, self.map_v = cv2.initUndistortRectifyMap(K, D, None, self.K, self.size,
-                                                             cv2.CV_32FC1)
-
-    def window(self, frame: np.ndarray, x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
-        """Undistorted pixels [y0, y1) x [x0, x1) of ``frame`` (black outside the frame)."""
-        return cv2.remap(frame, self.map_u[y0:y1, x0:x1], self.map_v[y0:y1, x0:x1],
-                         cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
-
-    def distorted(self, pixels: np.ndarray) -> np.ndarray:
-        """Frame pixels (n, 2) of undistorted-canvas pixels (n, 2)."""
-        rays = np.column_stack([(pixels - self.K[:2, 2]) / np.diag(self.K)[:2],
-                                np.ones(len(pixels))])
-        rays[:, 0] -= self.K[0, 1] / self.K[0, 0] * rays[:, 1]
-        return project_points(rays, self.K_distorted, self.D)
-
-
-def pinhole(points: np.ndarray, K: np.ndarray) -> np.ndarray:
-    """Pixels (..., 2) of camera-frame points (..., 3) in an undistorted image (NaN if z <= 0)."""
-    z = points[..., 2]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inverse = 1.0 / np.where(z > 1e-6, z, np.nan)
-    x, y = points[..., 0] * inverse, points[..., 1] * inverse
-    return np.stack([K[0, 0] * x + K[0, 1] * y + K[0, 2], K[1, 1] * y + K[1, 2]], axis=-1)
-
-
 def _camera_points(poses: np.ndarray, samples: ViewSamples, image: ViewImage) -> np.ndarray:
     a = poses[:, :3] @ image.R_cam_track.T + image.t_cam_track
     c, s = np.cos(poses[:, 3])[:, None, None], np.sin(poses[:, 3])[:, None, None]
@@ -303,88 +250,93 @@ def score_view(poses: np.ndarray, samples: ViewSamples, image: ViewImage
     return read_scores(project_view_samples(poses, samples, image), samples, image)
 
 
-@dataclass(frozen=True)
-class DerivativeImage:
-    """An image with its first and second derivatives, for Newton steps on the contrast.
-
-    Attributes
-    ----------
-    values : ViewImage
-        The (blurred) image.
-    first : ndarray, shape (h, w, 3)
-        (f, df/du, df/dv) per pixel, float32.
-    second : ndarray, shape (h, w, 3)
-        (d2f/du2, d2f/dudv, d2f/dv2) per pixel, float32.
-    """
-
-    values: ViewImage
-    first: np.ndarray
-    second: np.ndarray
-
-    @classmethod
-    def of(cls, image: ViewImage) -> "DerivativeImage":
-        """Derivatives by 3x3 Sobel filters (exact for quadratics)."""
-        f = image.probability
-        sobel = {order: cv2.Sobel(f, cv2.CV_32F, *order, ksize=3, scale=scale)
-                 for order, scale in (((1, 0), 1 / 8), ((0, 1), 1 / 8), ((2, 0), 1 / 4),
-                                      ((1, 1), 1 / 4), ((0, 2), 1 / 4))}
-        return cls(image, cv2.merge([f, sobel[1, 0], sobel[0, 1]]),
-                   cv2.merge([sobel[2, 0], sobel[1, 1], sobel[0, 2]]))
+#: Offsets (pixels) at which the image is read around each sample for its derivatives.
+_STENCIL = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1], [1, 1], [1, -1], [-1, 1],
+                     [-1, -1]], dtype=np.float64)
 
 
-def contrast_derivatives(pose: np.ndarray, views: list[tuple[ViewSamples, DerivativeImage]]
-                         ) -> tuple[float, np.ndarray, np.ndarray]:
-    """Summed contrast of both cameras at ``pose`` with its gradient and Hessian.
+def _pixels_and_jacobian(pose: np.ndarray, samples: ViewSamples, image: ViewImage
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """Window pixels (k, 2) of the samples of ``pose`` and their Jacobian (k, 2, 4) with
+    respect to (x, y, z, yaw), analytic for the pinhole."""
+    K = image.K
+    X = _camera_points(pose[None], samples, image)[0]  # (k, 3)
+    inverse_z = 1.0 / X[:, 2]
+    uv = pinhole(X, K) - np.asarray(image.origin)
+    # dX/d(x, y, z, yaw): R_cam_track for the position, R Rz'(yaw) s for the yaw
+    c, s = np.cos(pose[3]), np.sin(pose[3])
+    d_yaw = -s * samples.MA + c * samples.MB  # (k, 3)
+    d_point = np.concatenate([np.broadcast_to(image.R_cam_track, (len(X), 3, 3)),
+                              d_yaw[:, :, None]], axis=2)  # (k, 3, 4)
+    # d(u, v)/dX of the pinhole
+    du = (K[0, 0] * d_point[:, 0] + K[0, 1] * d_point[:, 1]) * inverse_z[:, None] \
+        - ((K[0, 0] * X[:, 0] + K[0, 1] * X[:, 1]) * inverse_z ** 2)[:, None] * d_point[:, 2]
+    dv = K[1, 1] * (d_point[:, 1] * inverse_z[:, None]
+                    - (X[:, 1] * inverse_z ** 2)[:, None] * d_point[:, 2])
+    return uv, np.stack([du, dv], axis=1)
 
-    With the sample pixels' Jacobian J (k, 2, 4) with respect to the pose (analytic, pinhole)
-    and the image gradient g and Hessian H at each sample: ``grad = sum w J^T g`` and
-    ``Hess = sum w J^T H J`` (the projection's own curvature is negligible over the
-    millimetres a step spans).
+
+class LinearisedContrast:
+    """Summed silhouette contrast of both cameras near a pose, for Newton refinement.
+
+    The sample pixels are linearised in the pose, ``uv(p) = uv(p0) + J (p - p0)``; over the
+    few millimetres and hundredths of a radian of a refinement the error of that is far
+    below a hundredth of a pixel, and it is re-linearised when the pose wanders further.
+    The image is read bilinearly at the pixels and at +-1 pixel around them for its gradient
+    g and Hessian H, so that ``grad = sum w J^T g`` and ``Hess = sum w J^T H J``.
 
     Parameters
     ----------
     pose : ndarray, shape (4,)
-    views : list of (ViewSamples, DerivativeImage)
+        (x, y, z, yaw) to linearise at.
+    views : list of (ViewSamples, ViewImage)
         Best on a linear colour feature (see
         :class:`wipelab.vision.colour_model.LinearColourFeature`): its blurred edges stay
         centred on the true outline.
-
-    Returns
-    -------
-    value : float
-    gradient : ndarray, shape (4,)
-    hessian : ndarray, shape (4, 4)
+    reach : ndarray, shape (4,)
+        Re-linearise when a pose differs from the linearisation point by more than this.
     """
-    value, gradient, hessian = 0.0, np.zeros(4), np.zeros((4, 4))
-    c, s = np.cos(pose[3]), np.sin(pose[3])
-    for samples, image in views:
-        K = image.values.K
-        X = _camera_points(pose[None], samples, image.values)[0]  # (k, 3)
-        inverse_z = 1.0 / X[:, 2]
-        uv = pinhole(X, K) - np.asarray(image.values.origin)
-        # d(u, v)/dX of the pinhole, (k, 2, 3)
-        d_pixel = np.zeros((len(X), 2, 3))
-        d_pixel[:, 0, 0] = K[0, 0] * inverse_z
-        d_pixel[:, 0, 1] = K[0, 1] * inverse_z
-        d_pixel[:, 0, 2] = -(K[0, 0] * X[:, 0] + K[0, 1] * X[:, 1]) * inverse_z ** 2
-        d_pixel[:, 1, 1] = K[1, 1] * inverse_z
-        d_pixel[:, 1, 2] = -K[1, 1] * X[:, 1] * inverse_z ** 2
-        # dX/d(x, y, z, yaw), (k, 3, 4)
-        d_point = np.empty((len(X), 3, 4))
-        d_point[:, :, :3] = image.values.R_cam_track
-        d_point[:, :, 3] = -s * samples.MA + c * samples.MB
-        J = d_pixel @ d_point
-        first = sample_bilinear(image.first, uv).astype(np.float64)  # (k, 3)
-        second = sample_bilinear(image.second, uv).astype(np.float64)
-        w = samples.weights
-        value += w @ first[:, 0]
-        gradient += np.tensordot(J, w[:, None] * first[:, 1:], axes=([0, 1], [0, 1]))
-        H = second[:, [0, 1, 1, 2]].reshape(-1, 2, 2)
-        hessian += np.tensordot(J, w[:, None, None] * (H @ J), axes=([0, 1], [0, 1]))
-    return float(value), gradient, hessian
 
+    def __init__(self, pose: np.ndarray, views: list[tuple[ViewSamples, ViewImage]],
+                 reach: np.ndarray = np.array([0.004, 0.004, 0.004, 0.05])):
+        self.views = views
+        self.reach = reach
+        self._linearise(np.asarray(pose, dtype=np.float64))
 
-def summed_contrast(poses: np.ndarray, views: list[tuple[ViewSamples, DerivativeImage]]
-                    ) -> np.ndarray:
-    """Summed contrast of both cameras for poses (n, 4), shape (n,)."""
-    return sum(score_view(poses, samples, image.values)[0] for samples, image in views)
+    def _linearise(self, pose: np.ndarray) -> None:
+        self.pose = pose.copy()
+        self.linear = [_pixels_and_jacobian(pose, samples, image) for samples, image in self.views]
+
+    def _near(self, pose: np.ndarray) -> np.ndarray:
+        delta = pose - self.pose
+        if np.any(np.abs(delta) > self.reach):
+            self._linearise(pose)
+            delta = np.zeros(4)
+        return delta
+
+    def __call__(self, poses: np.ndarray) -> np.ndarray:
+        """Summed contrast of poses (n, 4) near the linearisation point, shape (n,)."""
+        delta = poses - self.pose
+        total = np.zeros(len(poses))
+        for (samples, image), (uv, J) in zip(self.views, self.linear):
+            pixels = uv + np.tensordot(delta, J, axes=(1, 2))  # (n, k, 2)
+            total += sample_bilinear(image.probability, pixels).astype(np.float64) @ samples.weights
+        return total
+
+    def derivatives(self, pose: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+        """Summed contrast at ``pose`` with its gradient (4,) and Hessian (4, 4)."""
+        delta = self._near(pose)
+        value, gradient, hessian = 0.0, np.zeros(4), np.zeros((4, 4))
+        for (samples, image), (uv, J) in zip(self.views, self.linear):
+            pixels = uv + J @ delta
+            f = sample_bilinear(image.probability, pixels[:, None, :] + _STENCIL).astype(np.float64)
+            w = samples.weights
+            gu, gv = 0.5 * (f[:, 1] - f[:, 2]), 0.5 * (f[:, 3] - f[:, 4])
+            huu, hvv = f[:, 1] - 2 * f[:, 0] + f[:, 2], f[:, 3] - 2 * f[:, 0] + f[:, 4]
+            huv = 0.25 * (f[:, 5] - f[:, 6] - f[:, 7] + f[:, 8])
+            Ju, Jv = J[:, 0], J[:, 1]  # (k, 4)
+            value += w @ f[:, 0]
+            gradient += (w * gu) @ Ju + (w * gv) @ Jv
+            hessian += (Ju.T * (w * huu)) @ Ju + (Jv.T * (w * hvv)) @ Jv \
+                + (Ju.T * (w * huv)) @ Jv + (Jv.T * (w * huv)) @ Ju
+        return float(value), gradient, hessian

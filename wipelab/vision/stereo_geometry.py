@@ -40,3 +40,20 @@ def reprojection_errors(calibration: StereoCalibration, points_left: np.ndarray,
     error_left = np.linalg.norm(calibration.left.project(points_left) - uv_left, axis=-1)
     error_right = np.linalg.norm(calibration.right.project(points_left) - uv_right, axis=-1)
     return np.maximum(error_left, error_right)
+
+
+def closest_point_of_rays(origin_a: np.ndarray, direction_a: np.ndarray,
+                          origin_b: np.ndarray, direction_b: np.ndarray) -> np.ndarray | None:
+    """Midpoint of the shortest segment between two rays (all (3,), one frame), or None if
+    they are parallel or it lies behind either origin."""
+    w = origin_a - origin_b
+    a, b, c = direction_a @ direction_a, direction_a @ direction_b, direction_b @ direction_b
+    d, e = direction_a @ w, direction_b @ w
+    denominator = a * c - b * b
+    if denominator <= 1e-12 * a * c:
+        return None
+    s = (b * e - c * d) / denominator
+    t = (a * e - b * d) / denominator
+    if s <= 0 or t <= 0:
+        return None
+    return 0.5 * (origin_a + s * direction_a + origin_b + t * direction_b)

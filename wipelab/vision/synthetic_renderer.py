@@ -390,11 +390,12 @@ class StereoRenderer:
                 layer = window.astype(np.float32)
                 self._draw(layer, prims, offset)
                 total += layer
-            blurred = cv2.GaussianBlur(total / len(drawn), (0, 0), 0.6)
-            image[y0:y1, x0:x1] = np.clip(blurred + 0.5, 0, 255).astype(np.uint8)
-        return image, self._visible_fraction(mid, (height, width))
+            # lens blur of what was drawn (the background already has it)
+            change = cv2.GaussianBlur(total / len(drawn) - window, (0, 0), 0.6)
+            image[y0:y1, x0:x1] = np.clip(window + change + 0.5, 0, 255).astype(np.uint8)
+        return image, self._visible_fraction(mid)
 
-    def _visible_fraction(self, primitives, shape: tuple[int, int]) -> float:
+    def _visible_fraction(self, primitives) -> float:
         sponge, hand, occluder = primitives
         if not occluder:
             return 1.0

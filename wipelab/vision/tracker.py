@@ -41,11 +41,12 @@ from wipelab.vision.particle_filter import (align_yaw, normalised_weights,
 from wipelab.vision.pose_refinement import refine_pose
 from wipelab.vision.projection import invert_transform, transform_points
 from wipelab.vision.sponge_box import SpongeBox, yaw_rotation
-from wipelab.vision.sponge_likelihood import (DerivativeImage, SpongeTemplate, Undistorter,
-                                              ViewImage, ViewSamples, contrast_derivatives,
-                                              facing_camera, pinhole, score_view,
-                                              summed_contrast, view_samples)
-from wipelab.vision.stereo_geometry import reprojection_errors, triangulate_pixels
+from wipelab.vision.sponge_likelihood import (LinearisedContrast, SpongeTemplate, ViewImage,
+                                              ViewSamples, facing_camera, score_view,
+                                              view_samples)
+from wipelab.vision.stereo_geometry import (closest_point_of_rays, reprojection_errors,
+                                             triangulate_pixels)
+from wipelab.vision.undistortion import Undistorter, pinhole
 
 
 @dataclass(frozen=True)
@@ -78,13 +79,22 @@ class TrackerParams:
     refine_iterations : int
         Most Newton steps per frame.
     blur_sigma : float
-        Gaussian blur of both score images, pixels (smooths the score below a pixel).
+        Gaussian blur of the colour feature the refinement reads, pixels (smooths the score
+        below a pixel).
     window_margin : int
         Margin around the predicted sponge, pixels, of the window where frames are scored.
     min_contrast : float
         Silhouette contrast (back-projection) each camera needs for a valid frame.
     min_coverage : float
         Fraction of the faces turned to a camera that must look sponge-coloured in it.
+    retry_below : float
+        Refine again from other starting points when the summed contrast of both cameras is
+        below this fraction of its median over the last 30 valid frames.
+    retry_distance : float
+        Those starting points lie this far nearer and farther along the line of sight,
+        metres (plus one at the colour blob).
+    min_relative_contrast : float
+        A valid frame needs at least this fraction of that median contrast.
     search_scale : float
         Image scale of the global search for the sponge (acquisition, after occlusions).
     min_blob_area : int
@@ -100,13 +110,16 @@ class TrackerParams:
     yaw_noise: float = 0.03
     likelihood_gain: float = 30.0
     search_offsets: tuple[float, ...] = (0.004, 0.008)
-    refine_offsets: tuple[float, ...] = (0.001, 0.002, 0.0035, 0.005)
+    refine_offsets: tuple[float, ...] = (0.001, 0.0025, 0.0045)
     refine_steps: tuple[float, float, float, float] = (0.001, 0.001, 0.001, 0.015)
     refine_iterations: int = 8
     blur_sigma: float = 0.7
-    window_margin: int = 24
+    window_margin: int = 16
     min_contrast: float = 0.35
     min_coverage: float = 0.30
+    retry_below: float = 0.9
+    retry_distance: float = 0.012
+    min_relative_contrast: float = 0.75
     search_scale: float = 0.25
     min_blob_area: int = 150
     max_blob_reprojection: float = 25.0
@@ -182,7 +195,7 @@ class SpongeTracker:
         self.colour = colour
         self.params = params
         self.coarse = SpongeTemplate.build(params.sponge, edge_spacing=0.02, face_spacing=0.025)
-        self.fine = SpongeTemplate.build(params.sponge, edge_spacing=0.01, face_spacing=0.016)
+        self.fine = SpongeTemplate.build(params.sponge, edge_spacing=0.014, face_spacing=0.016)
         T_left_track = invert_transform(calibration.T_track_left)
         size = calibration.image_size
         self.views = (_View(calibration.K1, calibration.D1, T_left_track, size),
@@ -196,6 +209,8 @@ class SpongeTracker:
         self.particles: np.ndarray | None = None
         self.history: deque[np.ndarray] = deque(maxlen=3)  # last valid poses, newest first
         self.blob_offset: np.ndarray | None = None  # sponge centre minus colour-blob centre
+        self._sample_cache: dict[tuple, ViewSamples] = {}
+        self.recent_contrast: deque[float] = deque(maxlen=30)  # of the last valid frames
 
     # ------------------------------------------------------------------ public
     def step(self, left: np.ndarray, right: np.ndarray) -> FrameEstimate:
@@ -278,24 +293,40 @@ class SpongeTracker:
         return particles
 
     def _estimate_table_rotation(self, frames, guess: np.ndarray) -> np.ndarray:
-        """Without a world frame: choose the table orientation (tilt of its normal relative
-        to the left camera) under which sponge boxes near ``guess`` score best."""
-        best, best_score = None, -np.inf
+        """Without a world frame: choose the table orientation under which a refined sponge
+        box near ``guess`` shows the clearest outline.
+
+        The table normal is the left camera's up (-y) tilted away from its optical axis (as
+        for a camera looking down) by a pitch, then rolled about the optical axis; searched
+        on a 10 degree grid, then on a 2 degree grid around its best.
+        """
         poses = self._spread(guess, 2 * self.params.particles)
-        for pitch in np.deg2rad(np.arange(0, 91, 10)):
-            for roll in np.deg2rad(np.arange(-30, 31, 10)):
-                # the table normal: the camera's up (-y) tilted towards its optical axis
-                up = (cv2.Rodrigues(np.array([0.0, 0.0, roll]))[0]
-                      @ cv2.Rodrigues(np.array([-pitch, 0.0, 0.0]))[0] @ [0.0, -1.0, 0.0])
-                forward = np.cross([1.0, 0.0, 0.0], up)
-                forward /= np.linalg.norm(forward)
-                self.R_track_table = self.calibration.T_track_left[:3, :3] @ np.column_stack(
-                    [np.cross(forward, up), forward, up])
-                windows = self._windows(frames, poses)
-                score = self._score(poses, windows).max()
-                if score > best_score:
-                    best, best_score = self.R_track_table, score
-        return best
+
+        def table_rotation(pitch: float, roll: float) -> np.ndarray:
+            up = (cv2.Rodrigues(np.array([0.0, 0.0, roll]))[0]
+                  @ cv2.Rodrigues(np.array([pitch, 0.0, 0.0]))[0] @ [0.0, -1.0, 0.0])
+            forward = np.cross([1.0, 0.0, 0.0], up)
+            forward /= np.linalg.norm(forward)
+            return self.calibration.T_track_left[:3, :3] @ np.column_stack(
+                [np.cross(forward, up), forward, up])
+
+        def best_of(pitches, rolls) -> tuple[float, float]:
+            best, best_score = (0.0, 0.0), -np.inf
+            for pitch in np.deg2rad(pitches):
+                for roll in np.deg2rad(rolls):
+                    self.R_track_table = table_rotation(pitch, roll)
+                    self._sample_cache.clear()
+                    windows = self._windows(frames, poses)
+                    start = poses[int(np.argmax(self._score(poses, windows)))]
+                    score = self._quality(self._refine(start, windows), windows)[0].sum()
+                    if score > best_score:
+                        best, best_score = (np.rad2deg(pitch), np.rad2deg(roll)), score
+            return best
+
+        pitch, roll = best_of(np.arange(0, 91, 10), np.arange(-30, 31, 10))
+        pitch, roll = best_of(pitch + np.arange(-8, 9, 2), roll + np.arange(-8, 9, 2))
+        self._sample_cache.clear()
+        return table_rotation(np.deg2rad(pitch), np.deg2rad(roll))
 
     # ---------------------------------------------------------------- tracking
     def _predict(self) -> None:
@@ -320,20 +351,26 @@ class SpongeTracker:
         """Per-camera sample sets for boxes near ``pose`` (visibility decided at ``pose``)."""
         R_track_sponge = self.R_track_table @ yaw_rotation(pose[3])
         sets = []
-        for view in self.views:
+        for index, view in enumerate(self.views):
             faces, edges = facing_camera(R_track_sponge, pose[:3], view.eye, self.params.sponge)
-            sets.append(view_samples(template, view.R @ self.R_track_table, faces, edges,
-                                     offsets))
+            key = (id(template), index, faces.tobytes(), offsets)
+            if key not in self._sample_cache:  # a few face combinations occur per camera
+                self._sample_cache[key] = view_samples(template, view.R @ self.R_track_table,
+                                                       faces, edges, offsets)
+            sets.append(self._sample_cache[key])
         return sets
 
     def _windows(self, frames, poses: np.ndarray) -> list[_Window]:
         """Score images of each camera inside a window around the boxes of ``poses``."""
         p = self.params
-        lo, hi = poses[:, :3].min(axis=0), poses[:, :3].max(axis=0)
-        extent = np.linalg.norm(p.sponge.half_extents)
-        corners = np.array([[x, y, z] for x in (lo[0] - extent, hi[0] + extent)
-                            for y in (lo[1] - extent, hi[1] + extent)
-                            for z in (lo[2] - extent, hi[2] + extent)])
+        # the boxes of all poses fit in a prism along the table axes: the poses' extent
+        # grown by the sponge's half diagonal sideways and its half height up and down
+        table = poses[:, :3] @ self.R_track_table  # positions in table axes
+        half = p.sponge.half_extents
+        grow = np.array([np.hypot(half[0], half[1]), np.hypot(half[0], half[1]), half[2]])
+        lo, hi = table.min(axis=0) - grow, table.max(axis=0) + grow
+        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                            for z in (lo[2], hi[2])]) @ self.R_track_table.T
         windows = []
         for view, frame in zip(self.views, frames):
             pixels = view.project(corners)
@@ -346,28 +383,26 @@ class SpongeTracker:
             else:
                 x0, y0, x1, y1 = 0, 0, width, height
             crop = view.undistorter.window(frame, x0, y0, x1, y1)
-            images = []
-            for values in (self.model.back_project(crop), self.feature.apply(crop)):
-                if p.blur_sigma > 0:
-                    values = cv2.GaussianBlur(values, (0, 0), p.blur_sigma)
-                images.append(ViewImage(values, (float(x0), float(y0)), view.K, view.R, view.t))
-            windows.append(_Window(*images))
+            feature = self.feature.apply(crop)
+            if p.blur_sigma > 0:
+                feature = cv2.GaussianBlur(feature, (0, 0), p.blur_sigma)
+            origin = (float(x0), float(y0))
+            windows.append(_Window(
+                ViewImage(self.model.back_project(crop), origin, view.K, view.R, view.t),
+                ViewImage(feature, origin, view.K, view.R, view.t)))
         return windows
 
     def _window_blob(self, windows: list[_Window]) -> np.ndarray | None:
         """Triangulated centre (tracking frame) of the sponge-coloured pixels of both windows,
         or None when a window shows too few of them."""
-        centres = []
+        rays = []
         for window, view in zip(windows, self.views):
             m = cv2.moments(_mask(window.probability.probability), binaryImage=True)
             if m["m00"] < self.params.min_blob_area:
                 return None
             centre = np.array([m["m10"], m["m01"]]) / m["m00"] + window.probability.origin
-            centres.append(view.undistorter.distorted(centre[None])[0])
-        point_left = triangulate_pixels(self.calibration, centres[0][None], centres[1][None])
-        if not 0.05 < point_left[0, 2] < 10.0:
-            return None
-        return transform_points(self.calibration.T_track_left, point_left[0])
+            rays.append((view.eye, view.R.T @ np.linalg.solve(view.K, np.append(centre, 1.0))))
+        return closest_point_of_rays(*rays[0], *rays[1])
 
     def _score(self, poses: np.ndarray, windows: list[_Window]) -> np.ndarray:
         """Particle score on the back-projection: both cameras' contrast plus half their
@@ -398,23 +433,32 @@ class SpongeTracker:
         near_best = np.linalg.norm(self.particles[:, :3] - best[:3], axis=1) < 0.01
         estimate = weighted_pose_mean(align_yaw(self.particles[near_best], best[3]),
                                       weights[near_best] / weights[near_best].sum())
-        views = list(zip(self._samples(self.fine, estimate, p.refine_offsets),
-                         [DerivativeImage.of(window.feature) for window in windows]))
-        steps = np.array(p.refine_steps)
-        pose, _ = refine_pose(lambda pose: contrast_derivatives(pose, views),
-                              lambda poses: summed_contrast(poses, views), estimate, steps,
-                              iterations=p.refine_iterations)
-        pose[3] = wrap_half_turn(pose[3])
-        quality = [score_view(pose[None], samples, window.probability) for samples, window in
-                   zip(self._samples(self.fine, pose, p.refine_offsets), windows)]
-        contrast = np.array([q[0][0] for q in quality])
-        coverage = np.array([q[1][0] for q in quality])
-        valid = bool(np.all(contrast >= p.min_contrast) and np.all(coverage >= p.min_coverage))
+        pose = self._refine(estimate, windows)
+        contrast, coverage = self._quality(pose, windows)
+        typical = float(np.median(self.recent_contrast)) if self.recent_contrast else 0.0
+        if contrast.sum() < p.retry_below * typical:
+            # a weak fit: the outline may have locked onto a hand's edge (a box too small
+            # and too far, or too big and too near); try again from further along the line
+            # of sight and from the colour blob, keep the best
+            ray = estimate[:3] - 0.5 * (self.views[0].eye + self.views[1].eye)
+            ray /= np.linalg.norm(ray)
+            starts = [estimate + np.append(sign * p.retry_distance * ray, 0.0)
+                      for sign in (-1.0, 1.0)]
+            if blob is not None and self.blob_offset is not None:
+                starts.append(np.append(blob + self.blob_offset, estimate[3]))
+            for start in starts:
+                candidate = self._refine(start, windows)
+                quality = self._quality(candidate, windows)
+                if quality[0].sum() > contrast.sum():
+                    pose, (contrast, coverage) = candidate, quality
+        valid = bool(np.all(contrast >= p.min_contrast) and np.all(coverage >= p.min_coverage)
+                     and contrast.sum() >= p.min_relative_contrast * typical)
         if valid:
             keep = systematic_resample(weights, self.rng)
             self.particles = self.particles[keep[np.linspace(0, len(keep) - 1, p.particles)
                                                  .astype(int)]]
             self.history.appendleft(pose.copy())
+            self.recent_contrast.append(float(contrast.sum()))
             self.blob_offset = None if blob is None else pose[:3] - blob
         else:
             self.particles = self.particles[self.rng.choice(len(self.particles), p.particles,
@@ -423,6 +467,23 @@ class SpongeTracker:
             pose = np.full(4, np.nan)
         return FrameEstimate(pose, valid, contrast, coverage, self.particles.copy())
 
+    def _refine(self, estimate: np.ndarray, windows: list[_Window]) -> np.ndarray:
+        """Newton refinement of a pose on the linear colour feature of both cameras."""
+        p = self.params
+        contrast = LinearisedContrast(estimate, list(zip(
+            self._samples(self.fine, estimate, p.refine_offsets),
+            [window.feature for window in windows])))
+        pose, _ = refine_pose(contrast.derivatives, contrast, estimate,
+                              np.array(p.refine_steps), iterations=p.refine_iterations)
+        pose[3] = wrap_half_turn(pose[3])
+        return pose
+
+    def _quality(self, pose: np.ndarray, windows: list[_Window]) -> tuple[np.ndarray, np.ndarray]:
+        """Silhouette contrast (2,) and face coverage (2,) of a pose on the back-projections."""
+        quality = [score_view(pose[None], samples, window.probability) for samples, window in
+                   zip(self._samples(self.fine, pose, self.params.refine_offsets), windows)]
+        return (np.array([q[0][0] for q in quality]), np.array([q[1][0] for q in quality]))
+
     def _invalid(self) -> FrameEstimate:
         particles = self.particles.copy() if self.particles is not None else np.zeros((0, 4))
         return FrameEstimate(np.full(4, np.nan), False, np.zeros(2), np.zeros(2), particles)
@@ -430,4 +491,4 @@ class SpongeTracker:
 
 def _mask(probability: np.ndarray) -> np.ndarray:
     """Pixels more likely sponge than not, uint8 0/255."""
-    return (probability > 0.5).astype(np.uint8) * 255
+    return cv2.threshold(probability, 0.5, 255, cv2.THRESH_BINARY)[1].astype(np.uint8)

@@ -1,0 +1,68 @@
+import cv2
+import numpy as np
+import pytest
+
+from wipelab.vision.colour_model import (NAMED_COLOURS, ColourModel, ColourSource, HsvRange,
+                                         LinearColourFeature, largest_blob, parse_hsv_range)
+
+SPONGE, WOOD, SKIN = (40, 205, 240), (150, 188, 214), (122, 152, 208)
+
+
+def _scene(rng):
+    """A textured wooden frame with a yellow sponge (rows 40-80, cols 60-120) and a skin patch."""
+    image = np.clip(np.array(WOOD, float) + rng.normal(0, 6, (120, 200, 3)), 0, 255)
+    image[40:80, 60:120] = SPONGE
+    image[10:30, 130:180] = SKIN
+    mask = np.zeros((120, 200), np.uint8)
+    mask[40:80, 60:120] = 255
+    return image.astype(np.uint8), mask
+
+
+def test_red_range_wraps_through_hue_zero():
+    hsv = np.array([[[175, 200, 200], [3, 200, 200], [90, 200, 200]]], np.uint8)
+    assert NAMED_COLOURS["red"].mask(hsv).ravel().tolist() == [255, 255, 0]
+
+
+def test_named_yellow_finds_the_sponge_not_wood_or_skin():
+    image, mask = _scene(np.random.default_rng(0))
+    found = largest_blob(NAMED_COLOURS["yellow"].mask(cv2.cvtColor(image, cv2.COLOR_BGR2HSV)), 50)
+    assert found is not None
+    assert np.array_equal(found > 0, mask > 0)
+
+
+def test_histogram_model_separates_sponge_from_background():
+    rng = np.random.default_rng(1)
+    image, mask = _scene(rng)
+    model = ColourModel.fit([image], [mask])
+    other, _ = _scene(rng)  # a new frame of the same scene
+    probability = model.back_project(other)
+    assert probability[45:75, 65:115].mean() > 0.95
+    assert probability[mask == 0].mean() < 0.02
+
+
+def test_linear_feature_is_linear_in_the_mixing_of_sponge_and_background():
+    image, mask = _scene(np.random.default_rng(2))
+    feature = LinearColourFeature.fit([image], [mask])
+    sponge = feature.apply(np.array([[SPONGE]], np.uint8))[0, 0]
+    wood = feature.apply(np.array([[WOOD]], np.uint8))[0, 0]
+    assert sponge == pytest.approx(1.0, abs=0.1) and wood == pytest.approx(0.0, abs=0.1)
+    for alpha in (0.25, 0.5, 0.75):
+        mixed = np.round(alpha * np.array(SPONGE) + (1 - alpha) * np.array(WOOD))
+        value = feature.apply(mixed.reshape(1, 1, 3).astype(np.uint8))[0, 0]
+        assert value == pytest.approx(wood + alpha * (sponge - wood), abs=0.01)
+
+
+def test_parse_hsv_range_and_its_errors():
+    assert parse_hsv_range("20,100,80,35,255,255") == HsvRange((20, 100, 80), (35, 255, 255))
+    with pytest.raises(ValueError, match="six integers"):
+        parse_hsv_range("20,100,80")
+    with pytest.raises(ValueError, match="0-179"):
+        parse_hsv_range("200,100,80,35,255,255")
+
+
+def test_colour_source_needs_exactly_one_description():
+    with pytest.raises(ValueError, match="exactly one"):
+        ColourSource(name="yellow", roi=(0, 0, 5, 5))
+    with pytest.raises(ValueError, match="unknown colour 'mauve'"):
+        ColourSource(name="mauve")
+    assert ColourSource(roi=(1, 2, 3, 4)).option == "--roi 1,2,3,4"

@@ -1,0 +1,75 @@
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from wipelab.vision.calibration import load_calibration
+from wipelab.vision.colour_model import ColourSource
+from wipelab.vision.projection import invert_transform, transform_points
+from wipelab.vision.tracker import SpongeTracker, TrackerParams
+from wipelab.vision.video_io import StereoVideoReader
+
+
+def _run(demo, calibration, colour=ColourSource(name="yellow")):
+    tracker = SpongeTracker(calibration, colour, TrackerParams(seed=1))
+    estimates = [tracker.step(left, right)
+                 for left, right in StereoVideoReader(demo / "left.mp4", demo / "right.mp4")]
+    return (np.array([e.pose for e in estimates]), np.array([e.valid for e in estimates]),
+            estimates)
+
+
+@pytest.fixture(scope="module")
+def tracked(short_demo):
+    return _run(short_demo, load_calibration(short_demo / "calibration.yaml"))
+
+
+def test_converges_to_the_sponge_centre_within_a_few_millimetres(tracked, short_truth):
+    poses, valid, _ = tracked
+    t, centre, visible = short_truth
+    seen = visible == 1
+    assert valid[seen].mean() > 0.97
+    error = np.linalg.norm(poses[valid, :3] - centre[valid], axis=1)
+    assert np.sqrt(np.mean(error ** 2)) < 0.004
+    assert np.median(error) < 0.003
+
+
+def test_full_occlusion_is_marked_invalid_and_tracking_recovers(tracked, short_truth):
+    poses, valid, estimates = tracked
+    t, centre, visible = short_truth
+    hidden = np.flatnonzero(visible == 0)
+    assert not valid[hidden].any()
+    assert np.all(np.isnan(poses[hidden]))
+    end = hidden[-1] + 1
+    regained = end + np.flatnonzero(valid[end:])[0]
+    assert t[regained] - t[end] <= 0.5
+    after = valid & (np.arange(len(t)) >= regained)
+    assert np.linalg.norm(poses[after, :3] - centre[after], axis=1).max() < 0.015
+    assert estimates[hidden[0]].particles.shape == (TrackerParams().particles, 4)
+
+
+def test_without_a_world_pose_it_tracks_in_the_left_camera_frame(short_demo, short_truth):
+    calibration = load_calibration(short_demo / "calibration.yaml")
+    poses, valid, _ = _run(short_demo, replace(calibration, T_world_left=None))
+    t, centre, visible = short_truth
+    expected = transform_points(invert_transform(calibration.T_world_left), centre)
+    error = np.linalg.norm(poses[valid, :3] - expected[valid], axis=1)
+    assert valid[visible == 1].mean() > 0.9
+    assert np.median(error) < 0.006
+
+
+def test_a_colour_absent_from_the_video_is_never_found(short_demo):
+    poses, valid, _ = _run(short_demo, load_calibration(short_demo / "calibration.yaml"),
+                           ColourSource(name="blue"))
+    assert not valid.any() and np.all(np.isnan(poses))
+
+
+def test_colour_learnt_from_a_region_of_the_first_frame(short_demo, short_truth):
+    calibration = load_calibration(short_demo / "calibration.yaml")
+    t, centre, visible = short_truth
+    centre_left = transform_points(invert_transform(calibration.T_world_left), centre[0])
+    u, v = calibration.left.project(centre_left[None])[0].astype(int)
+    # a region on the visible front of the sponge (the hand hides the middle of its top)
+    poses, valid, _ = _run(short_demo, calibration, ColourSource(roi=(u - 25, v + 6, 50, 12)))
+    error = np.linalg.norm(poses[valid, :3] - centre[valid], axis=1)
+    assert valid[visible == 1].mean() > 0.9
+    assert np.median(error) < 0.004

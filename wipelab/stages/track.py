@@ -1,0 +1,386 @@
+"""The track stage: a stereo video of a wiping demonstration -> the sponge's 3D trajectory.
+
+Reads a demo directory (DESIGN.md: left.mp4, right.mp4, calibration.yaml, optional
+demo.toml), tracks the sponge with :class:`wipelab.vision.tracker.SpongeTracker` and writes
+
+* ``track.csv``: t, x, y, z (sponge-box centre, metres, world frame, or the left camera's
+  optical frame when the calibration has no T_world_left), valid (0 while occluded or lost;
+  positions are then empty), yaw (rad, about the table normal), and the normalised offsets
+  ``x_norm``, ``y_norm`` from the centre of the demonstration area (paper Fig. 3);
+* ``track.mcap`` / ``track.rrd``: both videos (video references), both camera calibrations,
+  /tf of the cameras, the track, the particles, the demonstration area, per-frame quality;
+  in Rerun also the particles and the estimate drawn over both images;
+* ``manifest.json``.
+
+Everything is checked before anything is written; bad input raises InputError.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+import tomllib
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+import rerun as rr
+import rerun.blueprint as rrb
+from tqdm import tqdm
+
+from wipelab.errors import InputError
+from wipelab.logs import StageRecorder
+from wipelab.manifest import build_manifest, write_json
+from wipelab.stage_output import staged_output
+from wipelab.trajectory_csv import write_trajectory
+from wipelab.vision.calibration import StereoCalibration, load_calibration
+from wipelab.vision.colour_model import NAMED_COLOURS, ColourSource, parse_hsv_range
+from wipelab.vision.demonstration_area import DemonstrationArea, measure_demonstration_area
+from wipelab.vision.projection import invert_transform
+from wipelab.vision.sponge_box import SpongeBox
+from wipelab.vision.tracker import SpongeTracker, TrackerParams
+from wipelab.vision.video_io import H264Writer, StereoVideoReader
+
+DEFAULT_COLOUR = "yellow"
+LEFT_FRAME, RIGHT_FRAME = "stereo_left_optical", "stereo_right_optical"
+
+
+@dataclass(frozen=True)
+class TrackParams:
+    """Settings of one track run (the command-line options).
+
+    Attributes
+    ----------
+    colour : str or None
+        Named sponge colour; with ``hsv`` and ``roi`` None, demo.toml's ``sponge_colour``
+        or :data:`DEFAULT_COLOUR`.
+    hsv : str or None
+        HSV range ``"H,S,V,H,S,V"`` (low then high, OpenCV units).
+    roi : tuple of int or None
+        (x, y, width, height) of a region of the first left frame showing the sponge.
+    particles : int
+        Particle count.
+    seed : int
+        Seed of the particle filter.
+    sponge_size : tuple of float or None
+        (length, width, height) of the sponge, metres; None: demo.toml's ``sponge_size`` or
+        a kitchen sponge's 0.110 x 0.075 x 0.030.
+    area_window : tuple of float
+        Time window (start, end), seconds, in which the demonstration area is measured.
+    logged_particles : int
+        Particles per frame written to the logs.
+    """
+
+    colour: str | None = None
+    hsv: str | None = None
+    roi: tuple[int, int, int, int] | None = None
+    particles: int = 100
+    seed: int = 0
+    sponge_size: tuple[float, float, float] | None = None
+    area_window: tuple[float, float] = (0.0, 10.0)
+    logged_particles: int = 40
+
+
+@dataclass
+class TrackResult:
+    """What track measured (also written to track.csv).
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+    poses : ndarray, shape (n, 4)
+        x, y, z (metres) and yaw (rad) in ``frame``; NaN where invalid.
+    valid : ndarray of bool, shape (n,)
+    area : DemonstrationArea
+    normalised : ndarray, shape (n, 2)
+    frame : str
+        ``world`` or ``left_optical``.
+    contrast, coverage : ndarray, shape (n, 2)
+        Per-frame quality in the left and right image.
+    particles : ndarray, shape (n, m, 4)
+        A sample of each frame's particles.
+    """
+
+    t: np.ndarray
+    poses: np.ndarray
+    valid: np.ndarray
+    area: DemonstrationArea
+    normalised: np.ndarray
+    frame: str
+    contrast: np.ndarray
+    coverage: np.ndarray
+    particles: np.ndarray = field(repr=False)
+
+
+@dataclass(frozen=True)
+class Demo:
+    """A validated demo directory."""
+
+    left: Path
+    right: Path
+    calibration_path: Path
+    calibration: StereoCalibration
+    reader: StereoVideoReader
+    metadata: dict
+
+
+def open_demo(demo_dir: str | os.PathLike) -> Demo:
+    """Check a demo directory and open its videos (nothing is decoded yet).
+
+    Raises
+    ------
+    InputError
+        Missing directory or files, unreadable videos, frame counts / fps / size that differ,
+        a bad calibration, a demo.toml that is not TOML.
+    """
+    demo = Path(demo_dir)
+    if not demo.is_dir():
+        raise InputError(f"{demo}: not a directory (expected a demo directory with left.mp4, "
+                         "right.mp4 and calibration.yaml)")
+    left, right, calibration_path = demo / "left.mp4", demo / "right.mp4", demo / "calibration.yaml"
+    for path in (left, right, calibration_path):
+        if not path.is_file():
+            raise InputError(f"{path}: file not found")
+    calibration = load_calibration(calibration_path)
+    reader = StereoVideoReader(left, right, calibration.image_size)
+    metadata = {}
+    toml_path = demo / "demo.toml"
+    if toml_path.is_file():
+        try:
+            metadata = tomllib.loads(toml_path.read_text(encoding="utf-8"))
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+            raise InputError(f"{toml_path}: not valid TOML ({error})") from None
+    return Demo(left, right, calibration_path, calibration, reader, metadata)
+
+
+def _colour_source(params: TrackParams, metadata: dict, toml_name: str) -> ColourSource:
+    given = [v is not None for v in (params.colour, params.hsv, params.roi)]
+    if sum(given) > 1:
+        raise InputError("--color, --hsv and --roi: give only one of them")
+    try:
+        if params.hsv is not None:
+            return ColourSource(hsv=parse_hsv_range(params.hsv))
+        if params.roi is not None:
+            return ColourSource(roi=tuple(int(v) for v in params.roi))
+        name = params.colour or metadata.get("sponge_colour") or DEFAULT_COLOUR
+        if params.colour is None and name not in NAMED_COLOURS:
+            raise InputError(f"{toml_name}: sponge_colour {name!r} is not a known colour "
+                             f"({', '.join(NAMED_COLOURS)})")
+        return ColourSource(name=name)
+    except ValueError as error:
+        option = "--hsv" if params.hsv is not None else "--roi" if params.roi is not None \
+            else "--color"
+        raise InputError(f"{option}: {error}") from None
+
+
+def _sponge(params: TrackParams, metadata: dict, toml_name: str) -> SpongeBox:
+    size = params.sponge_size or metadata.get("sponge_size")
+    if size is None:
+        return SpongeBox()
+    option = "--sponge-size" if params.sponge_size else f"{toml_name}: sponge_size"
+    try:
+        values = [float(v) for v in size]
+        return SpongeBox(*values)
+    except (TypeError, ValueError):
+        raise InputError(f"{option}: expected three positive lengths in metres, got {size!r}") \
+            from None
+
+
+def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
+          params: TrackParams = TrackParams(), quiet: bool = False) -> TrackResult:
+    """Track the sponge of a demo directory and write track.csv, track.mcap, track.rrd and
+    manifest.json into ``out_dir`` (all or nothing).
+
+    Raises
+    ------
+    InputError
+        Bad demo directory (see :func:`open_demo`), a bad colour option, a truncated video,
+        or a sponge colour that never shows in the videos.
+    """
+    demo = open_demo(demo_dir)
+    toml_name = str(Path(demo_dir) / "demo.toml")
+    colour = _colour_source(params, demo.metadata, toml_name)
+    if colour.roi is not None:
+        x, y, w, h = colour.roi
+        width, height = demo.calibration.image_size
+        if x + w > width or y + h > height:
+            raise InputError(f"--roi: region {x},{y},{w},{h} does not fit in the "
+                             f"{width}x{height} frames")
+    tracker_params = TrackerParams(particles=params.particles, seed=params.seed,
+                                   sponge=_sponge(params, demo.metadata, toml_name))
+    tracker = SpongeTracker(demo.calibration, colour, tracker_params)
+    result = run_tracker(tracker, demo.reader, params, quiet)
+    if tracker.model is None:
+        raise InputError(f"{colour.option}: this colour never shows in both {demo.left} and "
+                         f"{demo.right}")
+    if result is None:
+        raise InputError(f"{demo.left}, {demo.right}: the sponge ({colour.option}) was never "
+                         "seen by both cameras at once")
+    parameters = asdict(params) | {"colour_source": colour.option,
+                                   "sponge": asdict(tracker_params.sponge)}
+    inputs = {"left_video": demo.left, "right_video": demo.right,
+              "calibration": demo.calibration_path}
+    with staged_output(out_dir) as tmp:
+        write_trajectory(tmp / "track.csv", result.t, _csv_columns(result))
+        with StageRecorder(tmp, "track", parameters, inputs, track_blueprint(),
+                           attachments={"calibration.yaml": demo.calibration_path}) as rec:
+            log_track(rec, demo, result, quiet)
+        write_json(tmp / "manifest.json", build_manifest("track", inputs, parameters,
+                                                         params.seed))
+    return result
+
+
+def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: TrackParams,
+                quiet: bool = False) -> TrackResult | None:
+    """Run ``tracker`` over every frame pair of ``reader``; None if no frame was valid."""
+    n = reader.frame_count
+    poses = np.full((n, 4), np.nan)
+    valid = np.zeros(n, bool)
+    contrast, coverage = np.zeros((n, 2)), np.zeros((n, 2))
+    m = params.logged_particles
+    particles = np.full((n, m, 4), np.nan)
+    with tqdm(total=n, desc="track", unit="frame", disable=quiet, file=sys.stderr,
+              leave=False) as bar:
+        for k, (left, right) in enumerate(reader):
+            estimate = tracker.step(left, right)
+            poses[k], valid[k] = estimate.pose, estimate.valid
+            contrast[k], coverage[k] = estimate.contrast, estimate.coverage
+            if len(estimate.particles):
+                pick = np.linspace(0, len(estimate.particles) - 1, m).astype(int)
+                particles[k] = estimate.particles[pick]
+            bar.update()
+    if not valid.any():
+        return None
+    t = np.arange(n) / reader.fps
+    area = measure_demonstration_area(t, poses[:, :2], valid, params.area_window)
+    normalised = np.where(valid[:, None], area.normalise(poses[:, :2]), np.nan)
+    return TrackResult(t, poses, valid, area, normalised, tracker.calibration.track_frame,
+                       contrast, coverage, particles)
+
+
+def _csv_columns(result: TrackResult) -> dict[str, np.ndarray]:
+    p = result.poses
+    return {"x": p[:, 0], "y": p[:, 1], "z": p[:, 2], "valid": result.valid.astype(int),
+            "yaw": p[:, 3], "x_norm": result.normalised[:, 0], "y_norm": result.normalised[:, 1]}
+
+
+def track_blueprint() -> rrb.Blueprint:
+    """Both images with particles and estimate, the 3D scene, and x, y, z over time."""
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Vertical(rrb.Spatial2DView(origin="/stereo/left", name="left camera"),
+                         rrb.Spatial2DView(origin="/stereo/right", name="right camera")),
+            rrb.Vertical(rrb.Spatial3DView(origin="/", name="scene"),
+                         rrb.TimeSeriesView(origin="/track/position", name="sponge x, y, z (m)"),
+                         row_shares=[3, 2]),
+            column_shares=[1, 1]),
+        collapse_panels=True)
+
+
+def _quaternion_xyzw(R: np.ndarray) -> np.ndarray:
+    """Unit quaternion (x, y, z, w) of a rotation matrix (3, 3)."""
+    w = np.sqrt(max(0.0, 1.0 + R[0, 0] + R[1, 1] + R[2, 2])) / 2.0
+    x = np.copysign(np.sqrt(max(0.0, 1.0 + R[0, 0] - R[1, 1] - R[2, 2])) / 2.0, R[2, 1] - R[1, 2])
+    y = np.copysign(np.sqrt(max(0.0, 1.0 - R[0, 0] + R[1, 1] - R[2, 2])) / 2.0, R[0, 2] - R[2, 0])
+    z = np.copysign(np.sqrt(max(0.0, 1.0 - R[0, 0] - R[1, 1] + R[2, 2])) / 2.0, R[1, 0] - R[0, 1])
+    q = np.array([x, y, z, w])
+    return q / np.linalg.norm(q)
+
+
+def _video_for_logs(path: Path, fps: float, size: tuple[int, int], workdir: Path) -> Path:
+    """``path`` itself if Rerun can play it (H.264/H.265/AV1 without B-frames), else an H.264
+    copy in ``workdir``."""
+    import av
+
+    with av.open(str(path)) as container:
+        stream = container.streams.video[0]
+        playable = stream.codec_context.name in ("h264", "hevc", "av1") and \
+            not stream.codec_context.has_b_frames
+    if playable:
+        return path
+    copy = workdir / path.name
+    capture = cv2.VideoCapture(str(path), cv2.CAP_FFMPEG)
+    with H264Writer(copy, int(round(fps)), size) as writer:
+        while True:
+            ok, frame = capture.read()
+            if not ok:
+                break
+            writer.write(frame)
+    capture.release()
+    return copy
+
+
+def log_track(rec: StageRecorder, demo: Demo, result: TrackResult, quiet: bool = True) -> None:
+    """Write the run into the MCAP and Rerun recordings of ``rec``."""
+    calibration = demo.calibration
+    width, height = calibration.image_size
+    frame = "world" if result.frame == "world" else LEFT_FRAME
+    T_track_left = calibration.T_track_left
+    T_track_right = T_track_left @ invert_transform(calibration.right.T_cam_ref)
+    tf = [(frame, RIGHT_FRAME, T_track_right[:3, 3], _quaternion_xyzw(T_track_right[:3, :3]))]
+    if frame == "world":
+        tf.insert(0, ("world", LEFT_FRAME, T_track_left[:3, 3],
+                      _quaternion_xyzw(T_track_left[:3, :3])))
+    rec.transforms(0.0, tf)
+    rec.camera_calibration("/stereo/left/calibration", 0.0, calibration.K1,
+                           _five(calibration.D1), width, height, LEFT_FRAME)
+    rec.camera_calibration("/stereo/right/calibration", 0.0, calibration.K2,
+                           _five(calibration.D2), width, height, RIGHT_FRAME)
+    with tempfile.TemporaryDirectory(prefix="wipelab-track-") as workdir:
+        for side, path, frame_id in (("left", demo.left, LEFT_FRAME),
+                                     ("right", demo.right, RIGHT_FRAME)):
+            video = _video_for_logs(path, demo.reader.fps, (width, height), Path(workdir))
+            rec.video(f"/stereo/{side}/video", video, result.t, frame_id=frame_id)
+
+    t, valid = result.t, result.valid
+    rec.scalars("/track/position", t[valid], result.poses[valid, :3], names=["x", "y", "z"])
+    rec.scalars("/track/valid", t, valid.astype(float))
+    rec.scalars("/track/normalised", t[valid], result.normalised[valid], names=["x_norm", "y_norm"])
+    rec.scalars("/track/contrast", t, result.contrast, names=["left", "right"])
+    rec.scalars("/track/coverage", t, result.coverage, names=["left", "right"])
+    area = result.area
+    rec.json("/track/demonstration_area", 0.0,
+             {"lower_left": area.lower_left, "upper_right": area.upper_right,
+              "centre": area.centre, "window_s": list(area.window), "frame": frame},
+             "wipelab.DemonstrationArea")
+    height_mean = float(np.nanmean(result.poses[valid, 2]))
+    (x0, y0), (x1, y1) = area.lower_left, area.upper_right
+    rectangle = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1], [x0, y0]])
+    rec.line_strip3d("/track/demonstration_area/outline", 0.0,
+                     np.column_stack([rectangle, np.full(5, height_mean)]), color=(90, 160, 255),
+                     frame_id=frame)
+    rec.line_strip3d("/track/trajectory", float(t[-1]), result.poses[valid, :3],
+                     color=(255, 200, 0), frame_id=frame)
+
+    views = ((calibration.left, "left", LEFT_FRAME), (calibration.right, "right", RIGHT_FRAME))
+    T_left_track = invert_transform(T_track_left)
+    for k in tqdm(range(len(t)), desc="logs", unit="frame", disable=quiet, file=sys.stderr,
+                  leave=False):
+        particles = result.particles[k]
+        particles = particles[np.isfinite(particles[:, 0])]
+        if len(particles):
+            rec.points3d("/track/particles", float(t[k]), particles[:, :3],
+                         colors=(80, 220, 80), radii=0.0015, frame_id=frame)
+        if valid[k]:
+            rec.points3d("/track/sponge", float(t[k]), result.poses[k, :3][None],
+                         colors=(255, 60, 60), radii=0.006, frame_id=frame)
+        for camera, side, frame_id in views:
+            entity = f"/stereo/{side}/overlay"
+            points_left = (particles[:, :3] @ T_left_track[:3, :3].T + T_left_track[:3, 3])
+            rec.rerun.log(f"{entity}/particles", rr.Points2D(camera.project(points_left),
+                                                             colors=(80, 220, 80), radii=1.0))
+            estimate = result.poses[k, :3] @ T_left_track[:3, :3].T + T_left_track[:3, 3]
+            rec.rerun.log(f"{entity}/sponge", rr.Points2D(
+                camera.project(estimate[None]) if valid[k] else np.zeros((0, 2)),
+                colors=(255, 60, 60), radii=4.0))
+    for _, side, frame_id in views:
+        for name in ("particles", "sponge"):
+            rec.rerun.log(f"/stereo/{side}/overlay/{name}",
+                          rr.CoordinateFrame(frame_id + "_image_plane"), static=True)
+
+
+def _five(D: np.ndarray) -> np.ndarray:
+    """The plumb-bob part (k1, k2, p1, p2, k3) of an OpenCV distortion vector."""
+    return np.concatenate([D, np.zeros(5)])[:5]
