@@ -6,14 +6,19 @@ beside two baselines; simulation speed.
 1. A movement model is learned from a synthetic demonstration (a circular wipe of 10 cm radius
    at 1 Hz, tracked at 30 Hz with 2 mm noise, somewhere in a camera's world frame) with
    ``wipelab learn --mode offline``.
-2. ``wipelab adapt`` on each surface (defaults: F0 = 10 N, |F| feedback, Omega / 4, the
-   unknown grasp of the simulator): periods to convergence, learned height against the true
-   contact height (sponge compression at F0 accounted for), force, contact, coverage.
-3. ``wipelab replay --frequency-scale 1 2 3`` of each adapted model, all four modes: the
+2. The adapt stage on each surface (defaults: F0 = 10 N, |F| feedback, Omega / 4, the unknown
+   grasp of the simulator, Y_r = the profile learned so far): periods to convergence, learned
+   height against the true contact height (sponge compression at F0 accounted for), force,
+   contact, coverage. Beside it, the same with the paper's constant Y_r (``reference =
+   "start"``).
+3. The replay stage at frequency scales 1, 2 and 3 of each adapted model, all four modes: the
    learned profile alone, with compliance on top, and the baselines compliance alone and the
    planar (unadapted) path.
-4. Speed: simulated seconds per wall-clock second of the control loop alone (headless, no
-   logging) and of each stage end to end (with MCAP/Rerun logging).
+4. Speed: simulated seconds per wall-clock second (and per CPU second of the process, which
+   the other jobs of a shared machine do not inflate) of the control loop alone (headless, no
+   logging; median of three runs) and of each stage with its MCAP/Rerun logging, run in this
+   process; and of one whole ``wipelab adapt`` command (Python start-up and imports included).
+   The load average is printed with it.
 
 Prints the tables; targets in brackets.
 """
@@ -22,16 +27,18 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
 WIPELAB = [sys.executable, "-c", "from wipelab.cli import main; main()"]
 F0 = 10.0
 
@@ -43,6 +50,13 @@ def wipelab(*args: str) -> float:
     if done.returncode != 0:
         sys.exit(f"wipelab {' '.join(args)} failed ({done.returncode}):\n{done.stderr}")
     return time.perf_counter() - start
+
+
+def timed(function, *args, **kwargs):
+    """(result, wall s, CPU s) of a call."""
+    wall, cpu = time.perf_counter(), time.process_time()
+    result = function(*args, **kwargs)
+    return result, time.perf_counter() - wall, time.process_time() - cpu
 
 
 def table(header: list[str], rows: list[list]) -> str:
@@ -70,8 +84,9 @@ def learn_model(work: Path) -> Path:
     return work / "learn" / "model.json"
 
 
-def loop_speed(model_path: Path, seconds: float = 30.0) -> float:
-    """Sim s per wall s of the control loop alone: compliance + learning on the flat table."""
+def loop_speed(model_path: Path, seconds: float = 20.0) -> tuple[float, float]:
+    """Sim s per wall s and per CPU s of the control loop alone: compliance + learning on the
+    flat table, no logging."""
     from wipelab.control import ForceProfileLearner
     from wipelab.sim.model_file import read_model
     from wipelab.sim.path import PathGenerator, place_model
@@ -86,17 +101,24 @@ def loop_speed(model_path: Path, seconds: float = 30.0) -> float:
         start = np.array([*path.position, task.start_height])
         session.move_to(start + [0, 0, CALIBRATION_LIFT], 1.0)
         session.calibrate()
+        session.move_to(start, 0.8)
         learner = ForceProfileLearner(model.kernels, model.width, model.alpha_s, model.beta_s,
                                       task.start_height, 1.0, session.dt)
         omega = model.omega / 4
-        begin, wall = session.time, time.perf_counter()
+        begin, wall, cpu = session.time, time.perf_counter(), time.process_time()
         while session.time - begin < seconds:
-            xy, acceleration = path.step(omega, session.dt)
-            session.tick(xy, task.start_height, True, path.phase, np.append(acceleration, 0))
+            xy, velocity, acceleration = path.step(omega, session.dt)
+            session.tick(xy, task.start_height, True, path.phase, velocity=np.append(velocity, 0),
+                         acceleration=np.append(acceleration, 0))
             learner.update(session.trace.last("tcp_cmd")[2], path.phase, omega)
-        return seconds / (time.perf_counter() - wall)
+        return (seconds / (time.perf_counter() - wall), seconds / (time.process_time() - cpu))
     finally:
         task.close()
+
+
+def speed_row(name: str, sim: float, wall: float, cpu: float) -> list:
+    return [name, f"{sim:.1f}", f"{wall:.2f}", f"{sim / wall:.1f}", f"{sim / cpu:.1f}",
+            f"{os.getloadavg()[0]:.1f}"]
 
 
 def main() -> None:
@@ -105,32 +127,42 @@ def main() -> None:
     parser.add_argument("--periods", type=int, default=3, help="scored replay periods per run")
     parser.add_argument("--keep", type=Path, default=None, help="keep the outputs here")
     args = parser.parse_args()
+    from wipelab.control import ProfileLearningParams
+    from wipelab.stages.adapt import AdaptParams, run_adapt
+    from wipelab.stages.replay import ReplayParams, run_replay
+
     work = args.keep or Path(tempfile.mkdtemp(prefix="bench_adapt-"))
     work.mkdir(parents=True, exist_ok=True)
     model_path = learn_model(work)
 
     learning_rows, replay_rows, speed_rows = [], [], []
     for surface in args.surfaces:
-        out = work / f"adapt_{surface}"
-        wall = wipelab("adapt", str(model_path), "-o", str(out), "--surface", surface, "-q")
-        m = json.loads((out / "metrics.json").read_text())
-        profile, hold = m["profile_last_learning_period"], m["force_hold"] or {}
-        learning_rows.append([
-            surface, m["feedback"], m["learning"]["periods"],
-            "yes" if m["learning"]["converged"] else "NO",
-            f"{100 * profile['true_height_range_m']:.1f}",
-            f"{1000 * profile['rms_height_error_m']:.2f}",
-            f"{1000 * profile['max_height_error_m']:.1f}",
-            f"{hold.get('rms_force_error_n', float('nan')):.2f}",
-            f"{100 * hold.get('contact_fraction', 0):.1f}",
-            f"{100 * hold.get('coverage', 0):.0f}", m["safety_stop"] or "-"])
-        speed_rows.append([f"adapt {surface} (end to end)", f"{m['sim_time_s']:.1f}",
-                           f"{wall:.1f}", f"{m['sim_time_s'] / wall:.1f}"])
+        for reference in ("learned", "start"):
+            out = work / f"adapt_{surface}" if reference == "learned" else \
+                work / f"adapt_{surface}_paper"
+            params = AdaptParams(surface=surface,
+                                 learning=ProfileLearningParams(reference=reference))
+            m, wall, cpu = timed(run_adapt, model_path, out, params, quiet=True)
+            profile, hold = m["profile_last_learning_period"], m["force_hold"] or {}
+            learning_rows.append([
+                surface, reference, m["learning"]["periods"],
+                "yes" if m["learning"]["converged"] else "NO",
+                f"{100 * profile['true_height_range_m']:.1f}",
+                f"{1000 * profile['rms_height_error_m']:.2f}",
+                f"{1000 * profile['mean_height_error_m']:+.2f}",
+                f"{1000 * profile['max_height_error_m']:.1f}",
+                f"{m['force_last_learning_period']['rms_force_error_n']:.2f}",
+                f"{hold.get('rms_force_error_n', float('nan')):.2f}",
+                f"{100 * hold.get('contact_fraction', 0):.1f}",
+                f"{100 * hold.get('coverage', 0):.0f}", m["safety_stop"] or "-"])
+            if reference == "learned":
+                speed_rows.append(speed_row(f"adapt {surface} (stage, with logging)",
+                                            m["sim_time_s"], wall, cpu))
 
         out_replay = work / f"replay_{surface}"
-        wall = wipelab("replay", str(out / "adapted_model.json"), "-o", str(out_replay),
-                       "--frequency-scale", "1", "2", "3", "--periods", str(args.periods), "-q")
-        r = json.loads((out_replay / "metrics.json").read_text())
+        r, wall, cpu = timed(run_replay, work / f"adapt_{surface}" / "adapted_model.json",
+                             out_replay, ReplayParams(frequency_scales=(1.0, 2.0, 3.0),
+                                                      periods=args.periods), quiet=True)
         for scale, runs in r["scales"].items():
             for mode, run in runs.items():
                 replay_rows.append([
@@ -140,23 +172,34 @@ def main() -> None:
                     f"{run.get('peak_force_n', float('nan')):.1f}",
                     f"{100 * run.get('coverage', 0):.0f}",
                     "stop" if run["safety_stop"] else "-"])
-        speed_rows.append([f"replay {surface} (end to end)", f"{r['sim_time_s']:.1f}",
-                           f"{wall:.1f}", f"{r['sim_time_s'] / wall:.1f}"])
+        speed_rows.append(speed_row(f"replay {surface} (stage, with logging)", r["sim_time_s"],
+                                    wall, cpu))
 
-    print("Force-profile learning (adapt; RMS/max: learned height vs true contact height over "
-          "the last learning period)")
-    print(table(["surface", "feedback", "periods", "converged", "true dz/period cm [>=3 flat]",
-                 "RMS mm [<=3]", "max mm", "|F|-F0 RMS N", "contact %", "coverage %",
+    print("Force-profile learning (adapt; RMS/mean/max: learned height vs true contact height "
+          "over the last learning period; reference: Y_r while learning, 'start' = the paper's)")
+    print(table(["surface", "reference", "periods [<=5]", "converged",
+                 "true dz/period cm [>=3 flat]", "RMS mm [<=3]", "mean mm", "max mm",
+                 "|F|-F0 RMS learning N", "|F|-F0 RMS hold N", "contact %", "coverage %",
                  "safety stop"], learning_rows))
     print(f"\nReplay (F0 = {F0:g} N; targets for the learned profile: RMS <= 2 N at 1x, <= 3 N at "
           f"3x, contact >= 99 %, peak <= {3 * F0:g} N)")
     print(table(["surface", "scale", "mode", "RMS(|F|-F0) N", "contact %", "peak N",
                  "coverage %", "safety"], replay_rows))
-    speed = loop_speed(model_path)
-    speed_rows.insert(0, ["control loop alone (headless, no logging)", "30.0",
-                          f"{30.0 / speed:.1f}", f"{speed:.1f}"])
-    print("\nSpeed (simulated s per wall-clock s) [>= 10, aim 50]")
-    print(table(["run", "sim s", "wall s", "sim/wall"], speed_rows))
+
+    loops = [loop_speed(model_path) for _ in range(3)]
+    wall_speed = statistics.median(s for s, _ in loops)
+    cpu_speed = statistics.median(c for _, c in loops)
+    speed_rows.insert(0, ["control loop alone (headless, no logging; median of 3)", "20.0",
+                          f"{20.0 / wall_speed:.2f}", f"{wall_speed:.1f}", f"{cpu_speed:.1f}",
+                          f"{os.getloadavg()[0]:.1f}"])
+    out = work / "adapt_cli"
+    wall = wipelab("adapt", str(model_path), "-o", str(out), "--surface", "flat", "-q")
+    sim = json.loads((out / "metrics.json").read_text())["sim_time_s"]
+    speed_rows.append([f"wipelab adapt flat (whole command, {os.cpu_count()} CPUs)",
+                       f"{sim:.1f}", f"{wall:.2f}", f"{sim / wall:.1f}", "-",
+                       f"{os.getloadavg()[0]:.1f}"])
+    print("\nSpeed (simulated s per wall-clock s [>= 10, aim 50]; per CPU s of this process)")
+    print(table(["run", "sim s", "wall s", "sim/wall", "sim/CPU", "load avg"], speed_rows))
     if args.keep is None:
         shutil.rmtree(work)
 

@@ -1,32 +1,43 @@
 """Benchmarks of the learn stage (issue 2): frequency, waveform, modulation, peer, speed.
 
-Run: ``python benchmarks/bench_learn.py`` (about two minutes on one core). Prints Markdown
+Run: ``python benchmarks/bench_learn.py`` (under a minute on one core). Prints Markdown
 tables. Signals (:mod:`wipelab.learning.signals`): two DOFs with an offset, 2nd and 3rd
 harmonics and white noise of 2 % of each DOF's amplitude, sampled at 30 Hz (vision) and
 500 Hz, fundamentals 0.3-3 Hz, optionally with a frequency step half-way.
+
+Every canonical system is shown twice: as the learner runs it (the start-up period detector
+hands its estimate to the oscillators) and with the oscillators alone (``start_up=False``),
+so that what the detector contributes and what the oscillators do by themselves are both
+on the table.
 """
 
 from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 
 from wipelab.learning import (AFOParameters, AFSParameters, OnlineLearner, OnlineParameters,
-                              PeriodicModel, fit_weights, learn_offline, learn_online)
+                              PeriodDetector, PeriodDetectorParameters, PeriodicModel, fit_weights,
+                              learn_offline, learn_online)
 from wipelab.learning.signals import (WIPING_SHAPES, HarmonicShape, periods_to_tolerance,
                                       waveform_rms_percent, wiping_signal)
 
 FREQUENCIES_HZ = (0.3, 0.5, 1.0, 2.0, 3.0)
 RATES_HZ = (30.0, 500.0)
 SEEDS = (0, 1)
-SYSTEMS = {
+_GAINS = {
     "AFS, wipelab gains (default)": OnlineParameters(),
     "AFO pool, wipelab gains": OnlineParameters(canonical="afo"),
     "AFS, Petric gains (K = K_Omega = 20, nu = 2)": OnlineParameters(afs=AFSParameters.petric()),
     "AFO pool, paper gains (K = K_Omega = 20)": OnlineParameters(canonical="afo", afo=AFOParameters.paper()),
 }
+SYSTEMS = {f"{name}, {variant}": replace(params, start_up=start_up)
+           for start_up, variant in ((True, "start-up detector"), (False, "oscillators alone"))
+           for name, params in _GAINS.items()}
+DEFAULTS = list(SYSTEMS)[:2]
 
 
 def table(title: str, header: list[str], rows: list[list]) -> None:
@@ -71,8 +82,10 @@ def frequency_tables() -> None:
                                          "cases"], summaries)
 
     rows = []
-    for name in list(SYSTEMS)[:2]:
-        params = SYSTEMS[name]
+    step_systems = {name: SYSTEMS[name] for name in DEFAULTS}
+    step_systems["AFS without the residual gain schedule (kappa = 0)"] = OnlineParameters(
+        afs=AFSParameters(residual_gain=0.0))
+    for name, params in step_systems.items():
         cells = []
         for rate_hz in RATES_HZ:
             for f in FREQUENCIES_HZ:
@@ -89,16 +102,37 @@ def frequency_tables() -> None:
 
     rows = []
     for coupling in ("mean", "reference"):
-        values = []
-        for rate_hz in RATES_HZ:
-            for f in FREQUENCIES_HZ:
-                t = np.arange(0, 12 / f, 1 / rate_hz)
-                Y, _ = wiping_signal(t, f, seed=0)
-                _, history = learn_online(t, Y, OnlineParameters(dof_coupling=coupling))
-                values.append(periods_to_tolerance(t, history.fundamental_hz, f))
-        rows.append([coupling] + _summary(values))
+        for start_up in (True, False):
+            values = []
+            for rate_hz in RATES_HZ:
+                for f in FREQUENCIES_HZ:
+                    t = np.arange(0, 12 / f, 1 / rate_hz)
+                    Y, _ = wiping_signal(t, f, seed=0)
+                    params = OnlineParameters(dof_coupling=coupling, start_up=start_up)
+                    _, history = learn_online(t, Y, params)
+                    values.append(periods_to_tolerance(t, history.fundamental_hz, f))
+            rows.append([coupling, "detector" if start_up else "alone"] + _summary(values))
     table("Several DOFs, one phase: who drives it (AFS; periods to 1 %, all 10 cases)",
-          ["phase driven by", "median", "worst", "cases <= 6", "cases"], rows)
+          ["phase driven by", "start-up", "median", "worst", "cases <= 6", "cases"], rows)
+
+
+def detector_table() -> None:
+    """The start-up period detector on its own: when it fires and how far off it is."""
+    rows = []
+    for rate_hz in RATES_HZ:
+        for f in FREQUENCIES_HZ:
+            t = np.arange(0, 12 / f, 1 / rate_hz)
+            found, errors = [], []
+            for seed in SEEDS:
+                Y, _ = wiping_signal(t, f, seed=seed)
+                detector = PeriodDetector(2, 1 / rate_hz, PeriodDetectorParameters(), 0.1, 10.0)
+                k = next(k for k in range(t.size) if detector.update(Y[k]))
+                found.append(t[k] * f)
+                errors.append(abs(1.0 / (detector.period_s_ * f) - 1.0) * 100.0)
+            rows.append([f"{f:g}", f"{rate_hz:g}", max(found), max(errors)])
+    table("Start-up period detector (YIN difference function, confirm = 1): periods of data "
+          "until it hands over, and its frequency error (worst of 2 noise seeds)",
+          ["f (Hz)", "rate (Hz)", "hand-over after (periods)", "frequency error (%)"], rows)
 
 
 def _last_period(model: PeriodicModel, t, clean, f, rate_hz) -> float:
@@ -115,16 +149,19 @@ def waveform_table() -> None:
             t = np.arange(0, 10 / f, 1 / rate_hz)
             Y, clean = wiping_signal(t, f, seed=0)
             online, history = learn_online(t, Y, OnlineParameters())
+            per_sample, _ = learn_online(t, Y, OnlineParameters(update_spacing=None))
             offline, _ = learn_offline(t, Y)
             last = t >= t[-1] - 1 / f
             rows.append([f"{f:g}", f"{rate_hz:g}",
                          _last_period(online, t, clean, f, rate_hz),
                          float(waveform_rms_percent(history.output[last], clean[last]).max()),
+                         _last_period(per_sample, t, clean, f, rate_hz),
                          _last_period(offline, t, clean, f, rate_hz)])
     table("Waveform RMS error, % of peak-to-peak (worst DOF), after 10 periods "
           "(limits: online 3, offline 1)",
           ["f (Hz)", "rate (Hz)", "online: model rollout", "online: DMP while learning (Fig. 5)",
-           "offline: model rollout"], rows)
+           "online, one LWR update per sample (as printed): rollout", "offline: model rollout"],
+          rows)
 
 
 def modulation_table() -> None:
@@ -231,6 +268,7 @@ def speed_table() -> None:
 def main() -> None:
     start = time.perf_counter()
     frequency_tables()
+    detector_table()
     waveform_table()
     modulation_table()
     peer_table()

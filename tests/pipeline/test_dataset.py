@@ -35,19 +35,19 @@ input = "learn:model.json"
 periods = 1
 """
 
-BROKEN = "line_1.25hz_seed0"
+BROKEN = "line_1.6hz_seed0"
 
 
 @pytest.fixture(scope="module")
 def data_set(tmp_path_factory):
-    """Five rendered demos (circle at 0.8 and 1.25 Hz, line at 0.8 and 1.25 Hz, figure8 at
-    1.25 Hz); the left video of one is cut off after 3000 bytes."""
+    """Five rendered demos (circle and line at 1.2 and 1.6 Hz, figure8 at 1.6 Hz); the left
+    video of one is cut off after 3000 bytes."""
     root = tmp_path_factory.mktemp("dataset")
     data = root / "demos"
     runner = CliRunner()
-    for pattern, frequencies in [("circle", ("0.8", "1.25")), ("line", ("0.8", "1.25")),
-                                 ("figure8", ("1.25",))]:
-        args = [str(data), "--pattern", pattern, "--duration", "4", "--fps", "15", "-j", "2",
+    for pattern, frequencies in [("circle", ("1.2", "1.6")), ("line", ("1.2", "1.6")),
+                                 ("figure8", ("1.6",))]:
+        args = [str(data), "--pattern", pattern, "--duration", "3", "--fps", "15", "-j", "2",
                 "-q"]
         for frequency in frequencies:
             args += ["--frequency", frequency]
@@ -62,8 +62,8 @@ def check_summary(out_dir, result):
     assert result.exit_code == 1, result.output
     with open(out_dir / "summary.csv") as f:
         rows = {row["demo"]: row for row in csv.DictReader(f)}
-    assert sorted(rows) == ["circle_0.8hz_seed0", "circle_1.25hz_seed0", "figure8_1.25hz_seed0",
-                            "line_0.8hz_seed0", BROKEN]
+    assert sorted(rows) == ["circle_1.2hz_seed0", "circle_1.6hz_seed0", "figure8_1.6hz_seed0",
+                            "line_1.2hz_seed0", BROKEN]
     broken = rows.pop(BROKEN)
     assert broken["status"] == "failed"
     assert f"{BROKEN}/left.mp4: cannot be decoded" in broken["error"]

@@ -28,7 +28,8 @@ def test_report_draws_the_figures_of_every_stage_and_summarises_the_metrics(robo
     model = json.loads((run_dir / "learn" / "model.json").read_text())
     assert summary.startswith("# Run run\n\n| stage | command | wall time (s) |")
     assert "| adapt | adapt |" in summary and "| replay | replay |" in summary
-    assert f"| learn.frequency_hz | {model['frequency_hz']:.4g} |" in summary
+    key_metrics = summary.split("## Key metrics")[1].split("<details>")[0]
+    assert f"| learn.frequency_hz | {model['frequency_hz']:.4g} |" in key_metrics
     assert "![learn: frequency adaptation" in summary
 
 

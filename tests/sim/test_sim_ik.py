@@ -74,3 +74,27 @@ def test_an_unreachable_target_is_reported_not_faked(arm, posture):
     tracker = arm.tracker(posture)
     _, error = tracker.solve(posture.arm, CENTRE + [0.6, 0.0, 0.0], max_iterations=300)
     assert error > 0.1
+
+
+def test_joint_velocity_gives_the_tcp_velocity(arm, posture):
+    tracker = arm.tracker(posture)
+    velocity = np.array([0.12, -0.05, 0.03])
+    qdot = tracker.joint_velocity(posture.arm, velocity)
+    _, jac = tracker.chain.jacobian(posture.arm)
+    assert jac[:3] @ qdot == pytest.approx(velocity, abs=1e-3)
+
+
+def test_orientation_weight_turns_the_hand_to_a_target(posture):
+    from wipelab.sim.ik import IKParams
+    from wipelab.sim.kinematics import rotation_about_axis, rotation_error
+
+    arm = RightArm(BasePose().joint_values(), IKParams(orientation_weight=0.3))
+    tracker = arm.tracker(posture)
+    start = tracker.chain.forward(posture.arm)
+    goal = rotation_about_axis(np.array([0.0, 0.0, 1.0]), 0.3) @ start[:3, :3]
+    q, error = tracker.solve(posture.arm, start[:3, 3], goal, max_iterations=300)
+    reached = tracker.chain.forward(q)
+    assert error < 1e-3
+    assert np.linalg.norm(rotation_error(reached[:3, :3], goal)) < 0.02
+    assert np.linalg.norm(rotation_error(tracker.chain.forward(
+        arm.tracker(posture).solve(posture.arm, start[:3, 3])[0])[:3, :3], goal)) > 0.1

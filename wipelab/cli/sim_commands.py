@@ -68,10 +68,16 @@ def _common(function):
               help="Periods with the learned profile after learning.")
 @click.option("--tolerance", type=float, default=0.002, show_default=True,
               help="Convergence: largest change of the learned profile over a period (m).")
+@click.option("--kernels", type=int, default=50, show_default=True,
+              help="Kernels of the adapted model (the x-y path is refitted onto them).")
+@click.option("--reference", type=click.Choice(["learned", "start"]), default="learned",
+              show_default=True,
+              help="Y_r while learning: the profile learned so far, or the start height "
+                   "(the paper's).")
 def adapt(model: Path, out_dir: Path, surface: str | None, force: float | None,
           feedback: str | None, base: str, sponge_stiffness: float, seed: int, quiet: bool,
           periods: int, center: str | None, amplitude_scale: float, slowdown: float,
-          hold_periods: int, tolerance: float) -> None:
+          hold_periods: int, tolerance: float, kernels: int, reference: str) -> None:
     """Learn the force profile of a surface for MODEL (model.json) on the simulated robot.
 
     The x-y path is centred at --center, slowed down, and executed with active compliance in
@@ -86,8 +92,8 @@ def adapt(model: Path, out_dir: Path, surface: str | None, force: float | None,
         amplitude_scale=amplitude_scale, slowdown=slowdown, periods=periods,
         hold_periods=hold_periods, force=10.0 if force is None else force,
         feedback=feedback or "norm", base=_pair("--base", base, 3),
-        sponge_stiffness=sponge_stiffness, seed=seed,
-        learning=ProfileLearningParams(tolerance=tolerance))
+        sponge_stiffness=sponge_stiffness, seed=seed, kernels=kernels,
+        learning=ProfileLearningParams(tolerance=tolerance, reference=reference))
     metrics = run_adapt(model, out_dir, params, quiet=quiet)
     learning, profile = metrics["learning"], metrics["profile_last_learning_period"]
     state = "converged" if learning["converged"] else "not converged"

@@ -8,9 +8,9 @@ Notation: F contact force on the tool (N, world, z up); F_0 target force; k_F fo
 from wipelab.control.compliance import (FEEDBACK_MODES, ComplianceIntegrator, ComplianceParams,
                                         compliance_velocity, dead_zone, feedback_force,
                                         safety_tripped)
-from wipelab.control.force_profile import (COMPARISON_PHASES, ConvergenceMonitor,
+from wipelab.control.force_profile import (COMPARISON_PHASES, REFERENCES, ConvergenceMonitor,
                                            ForceProfileLearner, ProfileLearningParams)
 
 __all__ = ["COMPARISON_PHASES", "FEEDBACK_MODES", "ComplianceIntegrator", "ComplianceParams",
-           "ConvergenceMonitor", "ForceProfileLearner", "ProfileLearningParams",
+           "ConvergenceMonitor", "ForceProfileLearner", "ProfileLearningParams", "REFERENCES",
            "compliance_velocity", "dead_zone", "feedback_force", "safety_tripped"]

@@ -19,6 +19,7 @@ continuous, no chattering at the boundary), and a cap of the force feedback at
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -51,13 +52,13 @@ class ComplianceParams:
 
 def feedback_force(force: np.ndarray, mode: str) -> float:
     """The scalar F of eq. 11 from the contact force (3,) (N, world): F_z or |F|."""
-    force = np.asarray(force, dtype=float)
-    return float(force[2]) if mode == "fz" else float(np.linalg.norm(force))
+    fx, fy, fz = np.asarray(force, dtype=float).tolist()
+    return fz if mode == "fz" else math.sqrt(fx * fx + fy * fy + fz * fz)
 
 
 def dead_zone(error: float, width: float) -> float:
     """Shifted dead zone: 0 inside [-width, width], error -/+ width outside."""
-    return float(np.sign(error) * max(abs(error) - width, 0.0))
+    return math.copysign(max(abs(error) - width, 0.0), error)
 
 
 def compliance_velocity(force: np.ndarray, params: ComplianceParams) -> float:
@@ -70,12 +71,12 @@ def compliance_velocity(force: np.ndarray, params: ComplianceParams) -> float:
     """
     error = feedback_force(force, params.feedback) - params.target_force
     velocity = params.force_gain * dead_zone(error, params.dead_zone)
-    return float(np.clip(velocity, -params.max_speed, params.max_speed))
+    return min(max(velocity, -params.max_speed), params.max_speed)
 
 
 def safety_tripped(force: np.ndarray, params: ComplianceParams) -> bool:
     """True when |F| (N) exceeds the safety limit: the movement must stop."""
-    return bool(np.linalg.norm(force) > params.safety_force)
+    return feedback_force(force, "norm") > params.safety_force
 
 
 class ComplianceIntegrator:

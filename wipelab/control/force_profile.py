@@ -26,15 +26,34 @@ from wipelab.learning.derivatives import CentredDerivatives
 COMPARISON_PHASES = np.linspace(0.0, 2.0 * math.pi, 128, endpoint=False)
 
 
+#: Accepted values of ``ProfileLearningParams.reference``.
+REFERENCES = ("start", "learned")
+
+
 @dataclass(frozen=True)
 class ProfileLearningParams:
-    """Parameters of force-profile learning and of its convergence criterion."""
+    """Parameters of force-profile learning and of its convergence criterion.
 
+    ``reference`` is the Y_r of eq. 10 while learning. ``"start"`` is the paper's: the start
+    height, so that compliance alone makes the whole height change and the learned Y lags
+    the surface by what the force loop needs to follow it (k_F k_sponge ~ 20 /s: ~2 mm at
+    the learning speed). ``"learned"`` (the default) makes Y_r the profile learned up to the
+    end of the last period (iterative learning, as in the authors' later work on coupling
+    DMPs with force feedback): compliance then only corrects what is left, which shrinks
+    every period, so that the lag shrinks with it.
+    """
+
+    reference: str = "learned"     # Y_r of eq. 10 while learning: "start" or "learned" (below)
     forgetting: float = 0.99       # lambda of eq. 14 (the paper's value)
     derivative_window: float = 0.04  # fraction of a period spanned by the derivative fit
     tolerance: float = 0.002       # m: largest change of the waveform over one period
     stable_periods: int = 1        # consecutive periods below tolerance needed
     min_periods: int = 2           # periods of learning before convergence may be declared
+
+    def __post_init__(self):
+        if self.reference not in REFERENCES:
+            raise ValueError(f"reference must be one of {', '.join(REFERENCES)}, "
+                             f"got {self.reference!r}")
 
 
 class ForceProfileLearner:

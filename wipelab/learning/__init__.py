@@ -3,7 +3,8 @@
 Layer 1, the canonical system, extracts the fundamental frequency Omega and a phase phi from
 the demonstration: the paper's pool of adaptive-frequency oscillators (eqs. 1-5,
 :mod:`~wipelab.learning.afo`) or the adaptive Fourier series of Petric et al.
-(:mod:`~wipelab.learning.afs`). Layer 2, the output system, is a periodic DMP (eqs. 6-8,
+(:mod:`~wipelab.learning.afs`), started from the period that a fast detector finds in the
+first two periods (:mod:`~wipelab.learning.period_detector`). Layer 2, the output system, is a periodic DMP (eqs. 6-8,
 :mod:`~wipelab.learning.dmp`) whose weights are learned online by incremental locally
 weighted regression (eqs. 13-15, :mod:`~wipelab.learning.lwr`) or offline by regression over
 a whole recording (:mod:`~wipelab.learning.batch_fit`).
@@ -26,7 +27,7 @@ from wipelab.learning.afs import AdaptiveFourierSeries, AFSParameters
 from wipelab.learning.batch_fit import fit_weights
 from wipelab.learning.dmp import PeriodicDMP, forcing_target
 from wipelab.learning.harmonic import (HarmonicFit, PeriodicityEstimate, fundamental_frequency_hz,
-                                       harmonic_fit, periodicity)
+                                       harmonic_fit, locked_series, periodicity)
 from wipelab.learning.kernels import default_width, kernel_activations, kernel_centres
 from wipelab.learning.limit_cycle import limit_cycle, limit_cycle_basis
 from wipelab.learning.lwr import IncrementalLWR
@@ -34,14 +35,15 @@ from wipelab.learning.model import MODEL_FORMAT, PeriodicModel
 from wipelab.learning.offline import OfflineParameters, learn_offline
 from wipelab.learning.online import (CANONICAL_SYSTEMS, LearnHistory, OnlineLearner,
                                      OnlineParameters, learn_online)
+from wipelab.learning.period_detector import PeriodDetector, PeriodDetectorParameters
 from wipelab.learning.sampling import to_uniform
 
 __all__ = [
     "AFOParameters", "AFSParameters", "AdaptiveFourierSeries", "AdaptiveOscillatorPool",
     "CANONICAL_SYSTEMS", "HarmonicFit", "IncrementalLWR", "LearnHistory", "MODEL_FORMAT",
-    "OfflineParameters", "OnlineLearner", "OnlineParameters", "PeriodicDMP", "PeriodicModel",
-    "PeriodicityEstimate", "default_width", "fit_weights", "forcing_target",
-    "fundamental_frequency_hz", "harmonic_fit", "kernel_activations", "kernel_centres",
-    "learn_offline", "learn_online", "limit_cycle", "limit_cycle_basis", "periodicity",
-    "to_uniform",
+    "OfflineParameters", "OnlineLearner", "OnlineParameters", "PeriodDetector",
+    "PeriodDetectorParameters", "PeriodicDMP", "PeriodicModel", "PeriodicityEstimate",
+    "default_width", "fit_weights", "forcing_target", "fundamental_frequency_hz", "harmonic_fit",
+    "kernel_activations", "kernel_centres", "learn_offline", "learn_online", "limit_cycle",
+    "limit_cycle_basis", "locked_series", "periodicity", "to_uniform",
 ]

@@ -14,9 +14,14 @@ below the fundamental can lock onto a subharmonic. The default initial frequency
 the top of the expected range (3 Hz for wiping), and the gains scale with the frequency (see
 :mod:`wipelab.learning.oscillators`).
 
+In the learner the approach from above is only the fallback: the start-up period detector
+normally hands the series its frequency, phase and coefficients after two periods
+(:meth:`AdaptiveFourierSeries.lock`), and the locked series then raises its coupling while
+its fit residual is large (the residual gain schedule of :mod:`wipelab.learning.oscillators`).
+
 ``AFSParameters.petric()`` gives the published constant gains. Several DOFs share phi and
-Omega. Integrated with explicit Euler substeps; series terms at or above the Nyquist
-frequency of the samples are switched off.
+Omega. Integrated with explicit Euler substeps; series terms near the Nyquist frequency of
+the samples are faded out (:func:`~wipelab.learning.oscillators.term_weight`).
 """
 
 from __future__ import annotations
@@ -27,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wipelab.learning.oscillators import (DOF_COUPLINGS, gain_scale, interpolated_inputs,
-                                          nearest_turn, phase_drive)
+                                          nearest_turn, phase_drive, residual_step, term_weight)
 
 
 @dataclass(frozen=True)
@@ -47,12 +52,16 @@ class AFSParameters:
     initial_frequency_hz: float = 3.0  # Omega(0) / 2 pi (Hz): the top of the expected range
     min_frequency_hz: float = 0.05     # Omega is kept in [min, max] (Hz)
     max_frequency_hz: float = 10.0
+    locked_coupling: float = 1.0       # c_L: once locked, K, K_Omega x (c_L + kappa E), E = mean e^2
+    residual_gain: float = 100.0       # kappa
+    residual_periods: float = 1.0      # E is low-passed over this many periods
 
     @classmethod
     def petric(cls) -> AFSParameters:
-        """The published defaults: M = 10, nu = 2, K = K_Omega = 20, Omega(0) = 2 pi, unscaled."""
+        """The published defaults: M = 10, nu = 2, K = K_Omega = 20, Omega(0) = 2 pi, unscaled,
+        no residual gain schedule."""
         return cls(n_terms=10, coupling=20.0, frequency_coupling=20.0, learning_rate=2.0,
-                   scale_with_frequency=False, initial_frequency_hz=1.0)
+                   scale_with_frequency=False, initial_frequency_hz=1.0, residual_gain=0.0)
 
 
 class AdaptiveFourierSeries:
@@ -81,18 +90,23 @@ class AdaptiveFourierSeries:
         self.alpha_ = np.zeros((n_dofs, params.n_terms + 1))
         self.beta_ = np.zeros((n_dofs, params.n_terms + 1))
         self.dt = math.inf
+        self.locked_ = False
+        self.residual_ = 0.0
 
     def _substep(self, u: np.ndarray, h: float) -> None:
         p = self.params
         m = gain_scale(self.omega_, p.scale_with_frequency)
         angles = self.harmonics * self.phase_
-        # Terms at or above the Nyquist frequency of the samples cannot be observed: off.
-        observable = self.harmonics * self.omega_ * self.dt < math.pi
-        cos_c = np.where(observable, np.cos(angles), 0.0)
-        sin_c = np.where(observable, np.sin(angles), 0.0)
+        # Terms at or above the Nyquist frequency of the samples cannot be observed: faded out.
+        weights = np.array([term_weight(c * self.omega_ * self.dt) for c in self.harmonics])
+        cos_c = weights * np.cos(angles)
+        sin_c = weights * np.sin(angles)
         error = u - (self.alpha_ @ cos_c + self.beta_ @ sin_c)
         drive = phase_drive(error, self.phase_, self.alpha_[:, 1], self.beta_[:, 1],
                             self.reference, self.mean_coupling)
+        if self.locked_:
+            self.residual_ = residual_step(self.residual_, error, self.omega_, h, p.residual_periods)
+            drive = drive * (p.locked_coupling + p.residual_gain * self.residual_)
         self.phase_ += h * (self.omega_ - p.coupling * m * drive)
         omega = self.omega_ - h * p.frequency_coupling * m * m * drive
         self.omega_ = min(max(omega, 2.0 * math.pi * p.min_frequency_hz),
@@ -120,6 +134,8 @@ class AdaptiveFourierSeries:
         self.phase_ += nearest_turn(phase - self.phase_)
         self.alpha_ = np.array(alpha, dtype=np.float64)
         self.beta_ = np.array(beta, dtype=np.float64)
+        self.locked_ = True
+        self.residual_ = 0.0
 
     def advance(self, previous: np.ndarray, current: np.ndarray, dt: float, n_sub: int) -> None:
         """Integrate over one sample interval dt with the input (d,) linear from previous to current."""

@@ -66,12 +66,12 @@ def evaluate_polynomial(coefficients: np.ndarray, x: float) -> tuple[np.ndarray,
     value = np.zeros(coefficients.shape[1])
     first = np.zeros(coefficients.shape[1])
     second = np.zeros(coefficients.shape[1])
+    power, below1, below2 = 1.0, 0.0, 0.0                       # x^q, x^(q-1), x^(q-2)
     for q in range(coefficients.shape[0]):
-        value += coefficients[q] * x ** q
-        if q >= 1:
-            first += q * coefficients[q] * x ** (q - 1)
-        if q >= 2:
-            second += q * (q - 1) * coefficients[q] * x ** (q - 2)
+        value += coefficients[q] * power
+        first += q * coefficients[q] * below1
+        second += q * (q - 1) * coefficients[q] * below2
+        below2, below1, power = below1, power, power * x
     return value, first, second
 
 

@@ -9,6 +9,17 @@ at every frequency, and so is its convergence measured in periods. Eq. 2 also ge
 gain K_Omega: with K_Omega = K (eqs. 1-2 as printed) the linearised loop
 s^2 + k s + k = 0 (k = K A / 2) keeps a pole near -1 rad/s however large K is.
 
+Residual gain schedule. Once a canonical system has been locked onto a detected period
+(:meth:`lock`), its coupling gains K and K_Omega are multiplied by 1 + kappa E, where E is
+the fit residual (mean e^2 over the DOFs, low-passed over about a period): near 1 while the
+series fits (E is then the noise floor, 2-5e-4 with 2 % noise), large when the movement
+changes. Measured with kappa = 100 on the benchmark's frequency steps: re-convergence in
+2.0-2.2 instead of 2.9-3.3 periods. The price is a little more ripple on noisier input: the
+largest deviation of the fundamental over periods 6-12 is unchanged with 2 % noise and up to
+20 % larger with 10 % noise (2.4 -> 2.8 % at 3 Hz sampled at 30 Hz, 0.26 -> 0.34 % at
+500 Hz). Before the lock it is off: with the large residual of an unlocked oscillator it made
+the fallback (no period detected) slower and less stable (up to 11 periods, or no lock).
+
 Several DOFs share one phase. The *reference* DOF defines it: its component at an
 oscillator's frequency is a pure cosine of that oscillator's phase (the beta coefficient is
 held at 0, as in Petric et al.), so its error drives the phase through e sin(phi) exactly as
@@ -28,6 +39,12 @@ import numpy as np
 
 #: Normalised amplitude below which a non-reference DOF's phase drive is faded out.
 R_FADE = 0.1
+
+#: A series term at harmonic c fades out linearly between c Omega dt = FADE_START pi and pi
+#: (the Nyquist frequency of the samples). A hard cut-off switched a term on and off whenever
+#: Omega crossed it: at 3 Hz sampled at 30 Hz the 5th harmonic sits exactly on Nyquist, and
+#: its switching threw the locked AFS off by up to 18 % (measured).
+FADE_START = 0.75
 
 DOF_COUPLINGS = ("mean", "reference")
 
@@ -72,6 +89,19 @@ def phase_drive(error: np.ndarray, phase, alpha1: np.ndarray, beta1: np.ndarray,
         drive = (drive + (terms * others).sum(axis=-1)) \
             / (1.0 + (amplitude / (amplitude + R_FADE) * others).sum(axis=-1))
     return drive
+
+
+def residual_step(residual: float, error: np.ndarray, omega: float, h: float, periods: float) -> float:
+    """E, the mean squared error e_j^2 over the DOFs low-passed over ``periods`` periods of
+    Omega, one substep of h seconds later (normalised units)."""
+    rate = min(h * abs(omega) / (2.0 * math.pi * periods), 1.0)
+    return residual + rate * (float(np.mean(error ** 2)) - residual)
+
+
+def term_weight(c_omega_dt: float) -> float:
+    """Weight of a series term whose phase advances c Omega dt (rad) per sample: 1 well below
+    Nyquist, 0 at or above it, linear in between (see FADE_START)."""
+    return min(max((math.pi - c_omega_dt) / ((1.0 - FADE_START) * math.pi), 0.0), 1.0)
 
 
 def nearest_turn(angle: float) -> float:

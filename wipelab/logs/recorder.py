@@ -335,11 +335,12 @@ class StageRecorder:
         entity = _checked_topic(topic)
         ns, index = self._time_column(t)
         translations = np.asarray(translations, dtype=float).reshape(-1, 3)
-        unit = np.array([fx.unit_quaternion(q) for q in np.asarray(q_xyzw).reshape(-1, 4)])
+        quaternions = np.asarray(q_xyzw, dtype=float).reshape(-1, 4)
+        unit = np.array([fx.unit_quaternion(q) for q in quaternions]).reshape(-1, 4)
         if translations.shape[0] != ns.size or unit.shape[0] != ns.size:
             raise ValueError(f"{topic}: need {ns.size} translations and quaternions")
         channel = self._mcap.protobuf_channel(topic, fm.PoseInFrame)
-        for time_ns, translation, quaternion in zip(ns.tolist(), translations, unit):
+        for time_ns, translation, quaternion in zip(ns.tolist(), translations, quaternions):
             self._mcap.write(channel, time_ns,
                              fx.pose_in_frame(time_ns, frame_id, translation, quaternion).encode())
         frames = {} if frame_id == WORLD_FRAME else \

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import contextlib
 import csv
-import fnmatch
 import io
 import os
 import time
@@ -27,7 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from wipelab.errors import InputError
-from wipelab.pipeline.metrics import run_metrics
+from wipelab.pipeline.metrics import is_key_metric, run_metrics
 from wipelab.pipeline.spec import Pipeline
 
 #: Files that mark a directory as a demonstration (DESIGN.md, "Demo directory").
@@ -36,12 +35,6 @@ DEMO_FILES = ("left.mp4", "right.mp4", "calibration.yaml")
 #: Columns of the summary that every row has, before the metrics.
 SUMMARY_COLUMNS = ("demo", "status", "seconds", "stages_run", "stages_reused")
 
-#: Metrics shown in the printed table (globs over ``<stage>.<key>``; the CSV has them all):
-#: learned frequency, learned height and force errors with the learned profile, and the force
-#: error of the replay with learned profile and compliance at every frequency scale.
-PRINTED_METRICS = ("*.frequency_hz", "*.profile_hold.rms_height_error_m",
-                   "*.force_hold.rms_force_error_n",
-                   "*.scales.*.learned+compliance.rms_force_error_n")
 
 
 @dataclass(frozen=True)
@@ -217,12 +210,11 @@ def write_summary_csv(path: str | os.PathLike, results: Sequence[DemoResult]) ->
         tmp.unlink(missing_ok=True)
 
 
-def format_summary(results: Sequence[DemoResult],
-                   metrics: Sequence[str] = PRINTED_METRICS) -> str:
-    """The summary as an aligned text table with the metrics matching ``metrics`` (globs)."""
+def format_summary(results: Sequence[DemoResult]) -> str:
+    """The summary as an aligned text table, with the key metrics (the CSV has them all)."""
     header, rows = summary_rows(results)
-    header = [name for name in header if name in SUMMARY_COLUMNS or name == "error"
-              or any(fnmatch.fnmatchcase(name, pattern) for pattern in metrics)]
+    header = [name for name in header
+              if name in SUMMARY_COLUMNS or name == "error" or is_key_metric(name)]
     table = [header] + [[row[name] for name in header] for row in rows]
     widths = [max(len(line[i]) for line in table) for i in range(len(header) - 1)]
     return "\n".join("  ".join([*(cell.ljust(w) for cell, w in zip(line, widths)), line[-1]])

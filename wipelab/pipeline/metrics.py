@@ -6,8 +6,10 @@ objects are joined with dots (``adapt.force.rms_error_n``); only finite numbers 
 
 from __future__ import annotations
 
+import fnmatch
 import json
 import math
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -19,6 +21,19 @@ METRIC_FILES: dict[str, tuple[str, ...] | None] = {
     "metrics.json": None,
     "model.json": ("frequency_hz",),
 }
+
+
+#: The metrics that say most (globs over ``<stage>.<key>``): the learned frequency, the
+#: learned height and force errors with the learned profile, and the force error of the
+#: replay with learned profile and compliance at each frequency scale.
+KEY_METRICS = ("*.frequency_hz", "*.profile_hold.rms_height_error_m",
+               "*.force_hold.rms_force_error_n",
+               "*.scales.*.learned+compliance.rms_force_error_n")
+
+
+def is_key_metric(name: str, patterns: Sequence[str] = KEY_METRICS) -> bool:
+    """True when ``name`` matches one of ``patterns`` (shell-style globs)."""
+    return any(fnmatch.fnmatchcase(name, pattern) for pattern in patterns)
 
 
 def run_metrics(run_dir: str | Path) -> dict[str, float]:

@@ -18,7 +18,7 @@ import numpy as np
 
 from wipelab.errors import InputError
 from wipelab.pipeline.cache import StageRecord, read_record
-from wipelab.pipeline.metrics import run_metrics
+from wipelab.pipeline.metrics import is_key_metric, run_metrics
 from wipelab.pipeline.spec import REPORT_DIR
 from wipelab.stage_output import staged_output
 
@@ -76,9 +76,15 @@ def summary_markdown(run_dir: Path, stages: list[tuple[Path, StageRecord]],
     lines = [f"# Run {run_dir.name}", "", "| stage | command | wall time (s) |", "|---|---|---|"]
     lines += [f"| {d.name} | {r.command} | {r.seconds:.1f} |" for d, r in stages]
     metrics = run_metrics(run_dir)
+    key = {name: value for name, value in metrics.items() if is_key_metric(name)}
+    if key:
+        lines += ["", "## Key metrics", "", "| metric | value |", "|---|---|"]
+        lines += [f"| {name} | {value:.4g} |" for name, value in key.items()]
     if metrics:
-        lines += ["", "## Metrics", "", "| metric | value |", "|---|---|"]
+        lines += ["", f"<details><summary>All {len(metrics)} metrics</summary>", "",
+                  "| metric | value |", "|---|---|"]
         lines += [f"| {name} | {value:.4g} |" for name, value in metrics.items()]
+        lines += ["", "</details>"]
     if figures:
         lines += ["", "## Figures"]
         for figure in figures:

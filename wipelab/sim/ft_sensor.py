@@ -107,11 +107,12 @@ def contact_wrench(reading: np.ndarray, rotation: np.ndarray, payload: PayloadMo
     sensor origin, world axes).
     """
     rotation = np.asarray(rotation, dtype=float)
-    g_s = rotation.T @ gravity
-    a_s = rotation.T @ np.asarray(acceleration, dtype=float)
-    force_s = payload.mass * (a_s - g_s) - (reading[:3] - payload.force_bias)
-    torque_s = -(reading[3:] - payload.torque_bias) - _skew(payload.com) @ (payload.mass * g_s)
-    return rotation @ force_s, rotation @ torque_s
+    weight = payload.mass * gravity
+    force = payload.mass * np.asarray(acceleration, dtype=float) - weight \
+        - rotation @ (reading[:3] - payload.force_bias)
+    torque = -rotation @ (reading[3:] - payload.torque_bias) - np.cross(rotation @ payload.com,
+                                                                       weight)
+    return force, torque
 
 
 class FirstOrderLowPass:

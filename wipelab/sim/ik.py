@@ -71,13 +71,16 @@ class ArmIK:
         self.lower = chain.lower + params.limit_margin
         self.upper = chain.upper - params.limit_margin
         self.rest = np.clip(np.asarray(rest, dtype=float), self.lower, self.upper)
+        self._position_only = (False, np.eye(3), params.orientation_weight, self.lower,
+                               self.upper, self.cost, self.rest, params.limit_zone,
+                               params.rest_gain, params.damping ** 2)
 
     def _kernel_arguments(self, rotation) -> tuple:
+        if rotation is None:
+            return self._position_only
         p = self.params
-        use_rotation = rotation is not None and p.orientation_weight > 0
-        target_rotation = np.eye(3) if rotation is None else np.asarray(rotation, dtype=float)
-        return (use_rotation, target_rotation, p.orientation_weight, self.lower, self.upper,
-                self.cost, self.rest, p.limit_zone, p.rest_gain, p.damping ** 2)
+        return (p.orientation_weight > 0, np.asarray(rotation, dtype=float), p.orientation_weight,
+                *self._position_only[3:])
 
     def step(self, q, position, rotation=None) -> np.ndarray:
         """Joint targets (n,) moving the TCP from posture ``q`` toward ``position`` (3,) (m,
@@ -85,10 +88,17 @@ class ArmIK:
         most ``params.max_step`` per joint."""
         q = np.asarray(q, dtype=float)
         position = np.asarray(position, dtype=float)
-        arguments = self._kernel_arguments(rotation)
+        arguments = (*self.chain.arrays, *self._kernel_arguments(rotation))
         for _ in range(self.params.iterations):
-            q = ik_iterate(*self.chain.arrays, q, position, *arguments, self.params.max_step)
+            q = ik_iterate(*arguments[:4], q, position, *arguments[4:], self.params.max_step)
         return q
+
+    def joint_velocity(self, q, tcp_velocity) -> np.ndarray:
+        """Joint velocities (n,) (rad/s) giving the TCP velocity (3,) (m/s, world) at posture
+        ``q``: the weighted damped least squares of one iteration, without the null space."""
+        return ik_velocity(*self.chain.arrays, np.asarray(q, dtype=float),
+                           np.asarray(tcp_velocity, dtype=float), self.lower, self.upper,
+                           self.cost, self.params.limit_zone, self.params.damping ** 2)
 
     def solve(self, q, position, rotation=None, max_iterations: int = 200
               ) -> tuple[np.ndarray, float]:
@@ -100,6 +110,42 @@ class ArmIK:
 
 
 # -- compiled kernels (numba) -----------------------------------------------------------------
+
+@njit(cache=True)
+def _inverse_costs(q, lower, upper, cost, limit_zone) -> np.ndarray:
+    """W^-1 (n,): each joint's inverse cost, rising smoothly to its limits."""
+    inv_cost = np.empty(q.size)
+    for j in range(q.size):
+        distance = max(min(q[j] - lower[j], upper[j] - q[j]), 1e-3)
+        inv_cost[j] = 1.0 / (cost[j] * (1.0 + (limit_zone / distance) ** 2))
+    return inv_cost
+
+
+@njit(cache=True)
+def _weighted_solution(rows, weighted, rhs, damping2) -> np.ndarray:
+    """W^-1 J^T (J W^-1 J^T + lambda^2 I)^-1 rhs with ``weighted`` = J W^-1 (m, n)."""
+    m = rows.shape[0]
+    gram = damping2 * np.eye(m)
+    for a in range(m):
+        for b in range(m):
+            gram[a, b] += np.dot(weighted[a], rows[b])
+    solution = np.linalg.solve(gram, rhs)
+    dq = np.zeros(rows.shape[1])
+    for r in range(m):
+        dq += solution[r] * weighted[r]
+    return dq
+
+
+@njit(cache=True)
+def ik_velocity(before, axes, prismatic, tail, q, tcp_velocity, lower, upper, cost, limit_zone,
+                damping2) -> np.ndarray:
+    """Joint velocities (n,) for a TCP velocity (3,) at ``q`` (see :meth:`ArmIK.joint_velocity`)."""
+    jac = np.empty((6, q.size))
+    chain_jacobian(before, axes, prismatic, tail, q, jac)
+    rows = np.ascontiguousarray(jac[:3])
+    weighted = rows * _inverse_costs(q, lower, upper, cost, limit_zone)
+    return _weighted_solution(rows, weighted, tcp_velocity, damping2)
+
 
 @njit(cache=True)
 def ik_iterate(before, axes, prismatic, tail, q, position, use_rotation, rotation,
@@ -125,24 +171,15 @@ def ik_iterate(before, axes, prismatic, tail, q, position, use_rotation, rotatio
         for r in range(3):
             error[3 + r] = orientation_weight * turn[r]
             rows[3 + r] = orientation_weight * jac[3 + r]
-    inv_cost = np.empty(n)
-    for j in range(n):
-        distance = max(min(q[j] - lower[j], upper[j] - q[j]), 1e-3)
-        inv_cost[j] = 1.0 / (cost[j] * (1.0 + (limit_zone / distance) ** 2))
+    inv_cost = _inverse_costs(q, lower, upper, cost, limit_zone)
     free = np.ones(n)
     posture = rest_gain * (rest - q)
     candidate = q.copy()
     for _ in range(3):
         weighted = rows * (inv_cost * free)
-        gram = damping2 * np.eye(m)
-        for a in range(m):
-            for b in range(m):
-                gram[a, b] += np.dot(weighted[a], rows[b])
         free_posture = posture * free
-        solution = np.linalg.solve(gram, error - rows @ free_posture)
-        dq = free_posture.copy()
-        for r in range(m):
-            dq += solution[r] * weighted[r]
+        dq = _weighted_solution(rows, weighted, error - rows @ free_posture, damping2) \
+            + free_posture
         scale = np.max(np.abs(dq)) / max_step
         if scale > 1.0:
             dq /= scale

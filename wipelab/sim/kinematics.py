@@ -69,12 +69,22 @@ def quaternion_xyzw_from_rotation(rotation: np.ndarray) -> np.ndarray:
     return quaternions_xyzw_from_rotations(rotation)[0]
 
 
+def rotations_from_quaternions_xyzw(quaternions) -> np.ndarray:
+    """Quaternions (n, 4) (x, y, z, w) (PyBullet order; normalised here) -> rotation matrices
+    (n, 3, 3)."""
+    q = np.asarray(quaternions, dtype=float).reshape(-1, 4)
+    x, y, z, w = (q / np.linalg.norm(q, axis=1, keepdims=True)).T
+    return np.stack([np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w),
+                               2 * (x * z + y * w)], -1),
+                     np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z),
+                               2 * (y * z - x * w)], -1),
+                     np.stack([2 * (x * z - y * w), 2 * (y * z + x * w),
+                               1 - 2 * (x * x + y * y)], -1)], 1)
+
+
 def rotation_from_quaternion_xyzw(q) -> np.ndarray:
     """Unit quaternion (x, y, z, w) (PyBullet order) -> rotation matrix (3, 3)."""
-    x, y, z, w = np.asarray(q, dtype=float) / np.linalg.norm(q)
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    return rotations_from_quaternions_xyzw(q)[0]
 
 
 @njit(cache=True)
@@ -149,6 +159,19 @@ def parse_urdf_joints(urdf_text: str) -> dict[str, UrdfJoint]:
                                  element.find("child").get("link"), pose,
                                  axis / np.linalg.norm(axis), lower, upper, effort)
     return joints
+
+
+def link_pose(urdf_text: str, link: str, values: dict[str, float] | None = None) -> np.ndarray:
+    """Pose (4, 4) of ``link`` in the URDF's root frame with the joints at ``values`` (rad or
+    m by name; 0 if absent)."""
+    values = dict(values or {})
+    by_child = {j.child: j for j in parse_urdf_joints(urdf_text).values()}
+    pose = np.eye(4)
+    while link in by_child:
+        joint = by_child[link]
+        pose = joint.transform(float(values.get(joint.name, 0.0))) @ pose
+        link = joint.parent
+    return pose
 
 
 class KinematicChain:

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wipelab.sim.kinematics import rotation_from_quaternion_xyzw
+from wipelab.sim.kinematics import rotations_from_quaternions_xyzw
 from wipelab.sim.sponge import bottom_points
 
 #: Contact threshold (N).
@@ -66,15 +66,15 @@ def coverage(height_at, sponge_pos: np.ndarray, sponge_quat: np.ndarray,
         Sponge size (m).
     """
     local = bottom_points(size, (11, 8))
-    rotations = np.array([rotation_from_quaternion_xyzw(q) for q in sponge_quat])
+    rotations = rotations_from_quaternions_xyzw(sponge_quat)
     world = np.asarray(sponge_pos)[:, None, :] + np.einsum("nij,kj->nki", rotations, local)
     cells = np.floor(world[..., :2] / COVERAGE_CELL).astype(np.int64)
+    keys = cells[..., 0] * (1 << 32) + cells[..., 1]      # one integer per cell
     gap = world[..., 2] - height_at(world[..., :2])
     touched = (gap < COVERAGE_GAP) & (np.asarray(sponge_force)[:, None] > CONTACT_FORCE)
-    area = {tuple(c) for c in cells.reshape(-1, 2).tolist()}
-    wiped = {tuple(c) for c in cells[touched].reshape(-1, 2).tolist()}
-    return {"coverage": len(wiped) / max(len(area), 1), "wiped_cells": len(wiped),
-            "area_cells": len(area), "cell_m": COVERAGE_CELL}
+    area, wiped = np.unique(keys).size, np.unique(keys[touched]).size
+    return {"coverage": wiped / max(area, 1), "wiped_cells": int(wiped), "area_cells": int(area),
+            "cell_m": COVERAGE_CELL}
 
 
 def profile_error(learned: np.ndarray, expected: np.ndarray) -> dict:

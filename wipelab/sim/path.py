@@ -16,12 +16,17 @@ from dataclasses import replace
 import numpy as np
 
 from wipelab.errors import InputError
-from wipelab.learning import PeriodicModel, limit_cycle
+from wipelab.learning import PeriodicModel, default_width, fit_weights, limit_cycle
 
 #: Phases (rad) on which a model's path is sampled for placement and checks.
 PATH_PHASES = np.linspace(0.0, 2.0 * math.pi, 256, endpoint=False)
 #: Phases per period in the table of a :class:`PathGenerator`.
-TABLE_PHASES = 16384
+TABLE_PHASES = 4096
+#: Phases per kernel at which :func:`with_kernels` refits a waveform.
+REFIT_SAMPLES_PER_KERNEL = 8
+#: Relative smoothness penalty of that refit (see :func:`wipelab.learning.fit_weights`):
+#: small, the waveform is exact data.
+REFIT_SMOOTHING = 1e-8
 
 
 def require_dofs(model: PeriodicModel, dofs, source: str) -> None:
@@ -45,6 +50,27 @@ def path_centre(model: PeriodicModel) -> np.ndarray:
     """Centre (2,) of the bounding box of the model's x-y path (m)."""
     xy = dof_waveform(model, ("x", "y"))
     return 0.5 * (xy.min(axis=0) + xy.max(axis=0))
+
+
+def with_kernels(model: PeriodicModel, n_kernels: int) -> PeriodicModel:
+    """The model on ``n_kernels`` kernels of the default width (eq. 8), its limit cycle kept:
+    the weights are refitted by least squares to the model's waveform at
+    :data:`REFIT_SAMPLES_PER_KERNEL` phases per kernel (a smooth path moves by well under a
+    micrometre; the refit error is reported by :func:`refit_error`)."""
+    if n_kernels == model.kernels:
+        return model
+    phases = np.linspace(0.0, 2.0 * math.pi, REFIT_SAMPLES_PER_KERNEL * max(n_kernels,
+                                                                            model.kernels),
+                         endpoint=False)
+    width = default_width(n_kernels)
+    weights = fit_weights(phases, model.waveform(phases), model.goal, model.amplitude,
+                          n_kernels, width, model.alpha_s, model.beta_s, smoothing=REFIT_SMOOTHING)
+    return replace(model, kernels=int(n_kernels), width=width, weights=weights)
+
+
+def refit_error(original: PeriodicModel, refitted: PeriodicModel, dofs) -> float:
+    """Largest difference (m) between two models' waveforms of ``dofs`` along the path."""
+    return float(np.max(np.abs(dof_waveform(original, dofs) - dof_waveform(refitted, dofs))))
 
 
 def place_model(model: PeriodicModel, centre, amplitude_scale: float = 1.0) -> PeriodicModel:
@@ -82,6 +108,7 @@ class PathGenerator:
         self.phase = float(phase)
         grid = np.linspace(0.0, 2.0 * math.pi, TABLE_PHASES + 1)
         self._position = dof_waveform(model, self.dofs, grid)
+        self._velocity = dof_waveform(model, self.dofs, grid, derivative=1)
         self._acceleration = dof_waveform(model, self.dofs, grid, derivative=2)
 
     def _lookup(self, table: np.ndarray) -> np.ndarray:
@@ -95,8 +122,14 @@ class PathGenerator:
         """Output (d,) (m) at the current phase."""
         return self._lookup(self._position)
 
-    def step(self, omega: float, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        """Advance the phase by omega dt (rad/s, s); returns the position (d,) (m) and the
-        acceleration (d,) (m/s^2) there (the feed-forward of the inertia compensation)."""
+    def max_speed(self, omega: float) -> float:
+        """Largest speed (m/s) of the output at Omega (rad/s)."""
+        return float(np.max(np.linalg.norm(self._velocity, axis=1))) * omega
+
+    def step(self, omega: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Advance the phase by omega dt (rad/s, s); returns the position (d,) (m), velocity
+        (d,) (m/s) and acceleration (d,) (m/s^2) there (the feed-forward of the joint servos
+        and of the inertia compensation)."""
         self.phase += omega * dt
-        return self._lookup(self._position), self._lookup(self._acceleration) * omega ** 2
+        return (self._lookup(self._position), self._lookup(self._velocity) * omega,
+                self._lookup(self._acceleration) * omega ** 2)

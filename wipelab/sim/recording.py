@@ -1,10 +1,15 @@
 """Logging a wiping run to MCAP and Rerun (through :class:`wipelab.logs.StageRecorder`).
 
-Topics (``<stage>`` is ``adapt`` or ``replay``; all times are simulated seconds):
+Topics (``<stage>`` is ``adapt`` or ``replay``; all times are simulated seconds). The
+controller's series (wrench, force, height, force_norm, contact) have every control period;
+what is for looking at (the 3D scene, joint states, segment, phase) has ``POSE_RATE_HZ``.
+Each series is written in one go (:meth:`~wipelab.logs.StageRecorder.scalars`,
+``transform_series``, ``pose_series``, ``arrow_series``), not per time stamp.
 
 - ``/tf``: every URDF joint as a frame transform (parent link -> child link): fixed and held
   joints once, the 10 moving joints at ``POSE_RATE_HZ``; plus ``world -> sponge``.
-- ``/robot/joint_states/position``, ``/robot/joint_states/command``: torso + right arm (rad).
+- ``/robot/joint_states/position``, ``/robot/joint_states/command``: torso + right arm (rad),
+  at ``POSE_RATE_HZ``.
 - ``/<stage>/wrench``: raw F/T reading (sensor frame ``hand_r``, N and N m).
 - ``/<stage>/force``: contact force as the controller sees it (world, N) and its length;
   ``/<stage>/force_arrow``: that force drawn at the sponge (1 cm per N).
@@ -12,8 +17,9 @@ Topics (``<stage>`` is ``adapt`` or ``replay``; all times are simulated seconds)
 - ``/<stage>/force_norm``: |F|, F_0 and the true normal force on the sponge (N) - with
   ``/<stage>/height`` the paper's Figs. 6-7.
 - ``/<stage>/contact``: contact (0/1), sponge compression (m), compliance velocity (m/s).
-- ``/<stage>/segment``: the segment label over time (learning 1 -> 0 marks the end of
-  learning); ``/<stage>/events``: one JSON message per segment start.
+- ``/<stage>/segment``, ``/<stage>/phase``: the segment label (learning 1 -> 2 marks the end
+  of learning) and the phase (rad), at ``POSE_RATE_HZ``; ``/<stage>/events``: one JSON
+  message per segment start, at its exact time.
 - ``/<stage>/tcp_commanded``, ``/<stage>/tcp_actual``: TCP poses (``PoseInFrame``).
 - ``/adapt/learned_profile``: the learned z along the path after each period (3D line) and
   ``/adapt/profile`` (JSON: period, waveform) - how the profile converges.
@@ -112,8 +118,7 @@ def _log_poses(rec: StageRecorder, stage: str, task, trace: dict) -> None:
     """The 3D scene at :data:`POSE_RATE_HZ`: /tf of the moving joints and the sponge, the TCP
     poses and the force arrow, each as one series."""
     urdf_joints = parse_urdf_joints(armar3b_urdf_path().read_text())
-    every = max(1, int(round(1.0 / (POSE_RATE_HZ * task.world.config.dt))))
-    pick = slice(0, len(trace["t"]), every)
+    pick = _pose_samples(task, trace)
     t = trace["t"][pick]
     frames = []
     for name, values in zip(TORSO_JOINTS + RIGHT_ARM_JOINTS, trace["q"][pick].T):
@@ -131,11 +136,18 @@ def _log_poses(rec: StageRecorder, stage: str, task, trace: dict) -> None:
                      ARROW_SCALE * trace["force"][pick])
 
 
+def _pose_samples(task, trace: dict) -> slice:
+    """The control periods logged at :data:`POSE_RATE_HZ`."""
+    every = max(1, int(round(1.0 / (POSE_RATE_HZ * task.world.config.dt))))
+    return slice(0, len(trace["t"]), every)
+
+
 def _log_series(rec: StageRecorder, stage: str, task, trace: dict, segments) -> None:
     t = trace["t"]
+    pick = _pose_samples(task, trace)
     names = list(TORSO_JOINTS + RIGHT_ARM_JOINTS)
-    rec.scalars("/robot/joint_states/position", t, trace["q"], names=names)
-    rec.scalars("/robot/joint_states/command", t, trace["q_cmd"], names=names)
+    rec.scalars("/robot/joint_states/position", t[pick], trace["q"][pick], names=names)
+    rec.scalars("/robot/joint_states/command", t[pick], trace["q_cmd"][pick], names=names)
     rec.scalars(f"/{stage}/wrench", t, trace["wrench"],
                 names=["fx", "fy", "fz", "tx", "ty", "tz"])
     norm = np.linalg.norm(trace["force"], axis=1)
@@ -151,9 +163,10 @@ def _log_series(rec: StageRecorder, stage: str, task, trace: dict, segments) -> 
     rec.scalars(f"/{stage}/contact", t, np.column_stack([contact, trace["compression"],
                                                          trace["vz"]]),
                 names=["contact", "compression_m", "compliance_velocity"])
-    rec.scalars(f"/{stage}/segment", t, trace["mode"].astype(float), names=["segment"])
-    rec.scalars(f"/{stage}/phase", t, np.mod(np.nan_to_num(trace["phase"]), 2 * np.pi),
-                names=["phase"])
+    rec.scalars(f"/{stage}/segment", t[pick], trace["mode"][pick].astype(float),
+                names=["segment"])
+    rec.scalars(f"/{stage}/phase", t[pick],
+                np.mod(np.nan_to_num(trace["phase"][pick]), 2 * np.pi), names=["phase"])
     for segment in segments:
         rec.json(f"/{stage}/events", max(segment.start, float(t[0])),
                  {"event": segment.name, "mode": segment.mode}, "wipelab.Event",

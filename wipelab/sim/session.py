@@ -102,7 +102,7 @@ class WipingSession:
 
     # -- start-up ---------------------------------------------------------------------------
     def _hold(self, q_arm: np.ndarray, seconds: float) -> list[StepResult]:
-        self.world.command(np.concatenate([self.torso, q_arm]))
+        self.world.command(q_arm)
         return [self.world.step() for _ in range(int(round(seconds / self.dt)))]
 
     def calibrate(self) -> PayloadModel:
@@ -140,10 +140,11 @@ class WipingSession:
         for k in range(1, n + 1):
             s = k / n
             target = start + s * s * (3.0 - 2.0 * s) * (goal - start)
+            velocity = 6.0 * s * (1.0 - s) * (goal - start) / (n * self.dt)
             if self.payload is not None:
                 self.force = self.sense()
                 self._check_safety(mode)
-            self._command_and_step(target, target[2], np.nan, mode)
+            self._command_and_step(target, velocity, target[2], np.nan, mode)
 
     # -- one control period -----------------------------------------------------------------
     def sense(self) -> np.ndarray:
@@ -155,7 +156,7 @@ class WipingSession:
         return self.lowpass(force)
 
     def tick(self, xy, z_ref: float, compliance_on: bool, phase: float = np.nan,
-             acceleration=np.zeros(3), mode: int = 0) -> StepResult:
+             velocity=np.zeros(3), acceleration=np.zeros(3), mode: int = 0) -> StepResult:
         """One control period with the TCP commanded to (x, y, z_ref + compliance offset).
 
         Parameters
@@ -168,6 +169,8 @@ class WipingSession:
             Integrate eq. 11 onto z_r (otherwise the offset is held).
         phase : float
             Canonical phase (rad), recorded only.
+        velocity : array, shape (3,)
+            Velocity (m/s) of the reference (x, y and z_r), the joint servos' feed-forward.
         acceleration : array, shape (3,)
             Commanded TCP acceleration (m/s^2), for the inertia compensation.
         mode : int
@@ -188,21 +191,18 @@ class WipingSession:
             self.integrator.velocity_ = 0.0
         target = np.array([xy[0], xy[1], z_ref + self.integrator.offset_])
         self.acceleration = np.asarray(acceleration, dtype=float)
-        return self._command_and_step(target, z_ref, phase, mode)
+        return self._command_and_step(target, velocity, z_ref, phase, mode)
 
-    def _command_and_step(self, target: np.ndarray, z_ref: float, phase: float,
+    def _command_and_step(self, target: np.ndarray, velocity, z_ref: float, phase: float,
                           mode: int) -> StepResult:
-        q_arm = self.tracker.step(self.q_arm, target)
-        velocity = (q_arm - self.q_arm) / self.dt
-        self.q_arm = q_arm
-        self.world.command(np.concatenate([self.torso, q_arm]),
-                           np.concatenate([np.zeros(self.torso.size), velocity]))
+        self.q_arm = self.tracker.step(self.q_arm, target)
+        self.world.command(self.q_arm, self.tracker.joint_velocity(self.q_arm, velocity))
         result = self.world.step()
         self.last = result
         self.trace.append(
             t=self.world.time, phase=phase, tcp_cmd=target, tcp=result.tcp,
             tcp_rot=result.tcp_rotation, q_cmd=np.concatenate([self.torso, self.q_arm]),
-            q=result.q,
+            q=np.concatenate([self.torso, result.q]),
             force=self.force, wrench=result.wrench,
             feedback=feedback_force(self.force, self.compliance.feedback), z_ref=z_ref,
             z_offset=self.integrator.offset_, vz=self.integrator.velocity_,
@@ -227,5 +227,6 @@ class WipingSession:
             target[2] += self.compliance.max_speed * self.dt
             self.force = self.sense()
             self.integrator.velocity_ = self.compliance.max_speed
-            self._command_and_step(target.copy(), target[2], phase, mode)
+            self._command_and_step(target.copy(), np.array([0.0, 0.0, self.compliance.max_speed]),
+                                   target[2], phase, mode)
 

@@ -89,9 +89,10 @@ def collision_spheres(size, radius: float = 0.008, grid: tuple[int, int] = (5, 4
     return np.stack([gx.ravel(), gy.ravel(), np.full(gx.size, -sz / 2 + radius)], axis=1)
 
 
-def touch_height(height_at, tcp_xy: np.ndarray, tcp_rotation: np.ndarray,
-                 tcp_from_sponge: np.ndarray, size, radius: float = 0.008) -> np.ndarray:
-    """TCP height (m, world) at which the uncompressed sponge first touches the surface.
+def touch(height_at, tcp_xy: np.ndarray, tcp_rotation: np.ndarray, tcp_from_sponge: np.ndarray,
+          size, radius: float = 0.008) -> tuple[np.ndarray, np.ndarray]:
+    """TCP height (m, world) at which the uncompressed sponge first touches the surface, and
+    the surface normal where it touches.
 
     The sponge touches with its collision spheres (:func:`collision_spheres`): a sphere of
     radius r whose centre is above surface point s with slope grad s touches when its centre
@@ -114,7 +115,10 @@ def touch_height(height_at, tcp_xy: np.ndarray, tcp_rotation: np.ndarray,
 
     Returns
     -------
-    ndarray, shape (n,): the lowest TCP z at which no sphere is below the surface.
+    height : ndarray, shape (n,)
+        The lowest TCP z at which no sphere is below the surface.
+    normal : ndarray, shape (n, 3)
+        Unit upward surface normal (world) under the sphere that touches first.
     """
     centres = collision_spheres(size, radius) @ tcp_from_sponge[:3, :3].T + tcp_from_sponge[:3, 3]
     world = np.einsum("nij,kj->nki", np.asarray(tcp_rotation), centres)           # (n, k, 3)
@@ -123,4 +127,8 @@ def touch_height(height_at, tcp_xy: np.ndarray, tcp_rotation: np.ndarray,
     gx = (height_at(xy + [step, 0.0]) - height_at(xy - [step, 0.0])) / (2 * step)
     gy = (height_at(xy + [0.0, step]) - height_at(xy - [0.0, step])) / (2 * step)
     clearance = radius * np.sqrt(1.0 + gx ** 2 + gy ** 2)
-    return np.max(height_at(xy) + clearance - world[..., 2], axis=1)
+    heights = height_at(xy) + clearance - world[..., 2]
+    first = np.argmax(heights, axis=1)[:, None]
+    slope = np.column_stack([-np.take_along_axis(gx, first, 1), -np.take_along_axis(gy, first, 1),
+                             np.ones((len(heights), 1))])
+    return np.max(heights, axis=1), slope / np.linalg.norm(slope, axis=1, keepdims=True)

@@ -22,7 +22,7 @@ from wipelab.sim.ft_sensor import FTSensorParams
 from wipelab.sim.ik import IKParams
 from wipelab.sim.path import dof_waveform
 from wipelab.sim.session import WipingSession
-from wipelab.sim.sponge import Grasp, SpongeParams, touch_height
+from wipelab.sim.sponge import Grasp, SpongeParams, touch
 from wipelab.sim.surfaces import Surface
 from wipelab.sim.world import SPONGE_SPHERE_RADIUS, BasePose, SimConfig, SimWorld
 
@@ -71,20 +71,38 @@ class WipingTask:
 
     def expected_contact_height(self, tcp_xy: np.ndarray, tcp_rotation: np.ndarray,
                                 ) -> np.ndarray:
-        """True TCP height (n,) (m) at which the sponge presses with F_0 at TCP x-y (n, 2) and
-        orientation (n, 3, 3): the touching height (sponge at rest) minus the spring's
-        compression (N - m_sponge g) / k under the normal force N (F_0 with F_z feedback;
-        F_0 / sqrt(1 + mu^2) with |F| feedback, where friction is part of |F|; the sponge's
-        own weight rests on the surface too)."""
-        compliance = self.options.compliance
-        normal = compliance.target_force
+        """True TCP height (n,) (m) at which the sponge, sliding along the path, presses with
+        F_0, at TCP x-y (n, 2) (consecutive samples of the motion) and orientation (n, 3, 3).
+
+        The touching height (sponge at rest, :func:`~wipelab.sim.sponge.touch`) lowered by
+        what compresses the spring (stiffness k along the sponge's axis a) to balance the
+        contact force: with n the surface normal where the sponge touches and v the sliding
+        direction (the path's, in the tangent plane), the surface pushes with N (n - mu v),
+        N = F_0 / sqrt(1 + mu^2) with |F| feedback (friction is part of |F|) or
+        F_0 / (n_z - mu v_z) with F_z feedback; the spring is compressed by
+        x = (N (n.a - mu v.a) - m_sponge g a_z) / k, for which the TCP moves down by
+        x (n.a) / n_z (the contact point stays on the surface).
+        """
+        compliance, sponge, mu = self.options.compliance, self.options.sponge, \
+            self.surface.friction
+        tcp_xy, tcp_rotation = np.asarray(tcp_xy, dtype=float), np.asarray(tcp_rotation)
+        height, normal = touch(self.surface.height_at, tcp_xy, tcp_rotation,
+                               self.world.tcp_from_sponge, sponge.size, SPONGE_SPHERE_RADIUS)
+        axis = tcp_rotation @ self.world.tcp_from_sponge[:3, 2]                    # (n, 3)
+        motion = np.zeros((len(tcp_xy), 3))
+        if len(tcp_xy) > 1:
+            motion[:, :2] = np.gradient(tcp_xy, axis=0)
+        slide = motion - np.sum(motion * normal, axis=1, keepdims=True) * normal
+        length = np.linalg.norm(slide, axis=1, keepdims=True)
+        slide = np.divide(slide, length, out=np.zeros_like(slide), where=length > 0)
         if compliance.feedback == "norm":
-            normal /= math.sqrt(1.0 + self.surface.friction ** 2)
-        touch = touch_height(self.surface.height_at, tcp_xy, tcp_rotation,
-                             self.world.tcp_from_sponge, self.options.sponge.size,
-                             SPONGE_SPHERE_RADIUS)
-        sponge = self.options.sponge
-        return touch - (normal - sponge.mass * 9.81) / sponge.stiffness
+            pressure = compliance.target_force / math.sqrt(1.0 + mu ** 2)
+        else:
+            pressure = compliance.target_force / (normal[:, 2] - mu * slide[:, 2])
+        along = np.sum(normal * axis, axis=1)
+        compression = (pressure * (along - mu * np.sum(slide * axis, axis=1))
+                       - sponge.mass * 9.81 * axis[:, 2]) / sponge.stiffness
+        return height - compression * along / normal[:, 2]
 
 
 def build_task(model: PeriodicModel, surface: Surface, options: TaskOptions,
@@ -118,9 +136,9 @@ def build_task(model: PeriodicModel, surface: Surface, options: TaskOptions,
     world = SimWorld(surface, posture.torso, start_arm, posture.tcp_rotation, options.base,
                      options.sponge, options.grasp, options.sensor, options.sim, options.seed)
     rotations = np.broadcast_to(posture.tcp_rotation, (len(path_xy), 3, 3))
-    touch = touch_height(surface.height_at, path_xy, rotations, world.tcp_from_sponge,
-                         options.sponge.size, SPONGE_SPHERE_RADIUS)
+    heights, _ = touch(surface.height_at, path_xy, rotations, world.tcp_from_sponge,
+                       options.sponge.size, SPONGE_SPHERE_RADIUS)
     session = WipingSession(world, tracker, posture.torso, options.compliance, options.sensor)
     session.q_arm = start_arm.copy()
     return WipingTask(surface, model, options, posture, world, session,
-                      float(touch.max() + START_CLEARANCE), path_xy)
+                      float(heights.max() + START_CLEARANCE), path_xy)

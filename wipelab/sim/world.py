@@ -2,45 +2,66 @@
 
 PyBullet (DIRECT, headless) steps the physics at ``physics_hz``; the controller runs at
 ``control_hz`` and calls :meth:`SimWorld.step` once per control period, which runs the
-physics sub-steps, makes the sponge's prismatic joint a spring-damper and averages the wrist
-F/T sensor over the period (its anti-aliasing). PyBullet quaternions are (x, y, z, w).
+physics sub-steps and averages the wrist F/T sensor over the period (its anti-aliasing). The
+sponge's prismatic joint is a spring-damper (PyBullet's PD control with gains k and c, in N/m
+and N s/m, evaluated at every physics step). PyBullet quaternions are (x, y, z, w).
 
-Only the joints the task moves are simulated as joints: the torso (3) and the right arm (7).
-The loaded copy of the URDF holds the platform fixed at the configured base pose
-(:func:`~wipelab.sim.urdf_edit.freeze_joints`) and leaves out the head and the left arm,
-which stand still far above the table and touch nothing
-(:func:`~wipelab.sim.urdf_edit.drop_subtrees`); this makes a control period about twice
-cheaper. The logs show the whole robot.
+Only what the task moves is simulated: the right arm (7 joints), its hand and the sponge.
+The loaded copy of the URDF holds the platform at the configured base pose and the torso at
+the task's posture (:func:`~wipelab.sim.urdf_edit.freeze_joints`), starts at the torso
+(:func:`~wipelab.sim.urdf_edit.subtree`, placed at its pose in the world) and leaves out the
+head, the left arm and the massless TCP frame (:func:`~wipelab.sim.urdf_edit.drop_subtrees`):
+a physics step then costs about a third of the whole robot's. The logs show the whole robot.
+
+The physics rate follows the tool's speed (:meth:`SimWorld.set_tool_speed`): at most
+``max_travel`` (0.5 mm) of TCP travel per physics step, and at least 240 Hz. The sponge is a
+light (80 g) rigid block on a spring that slides over the surface on small spheres; with
+longer steps the contact solver's penetration recovery adds a normal force that grows with the
+speed (at 240 Hz and 0.47 m/s, 1.9 mm per step, |F| doubled on a bowl's wall, alternating
+between ~70 N and ~1 N from one step to the next). Learning at a quarter of the demonstrated
+speed then runs at 360 Hz, a replay at 3x at 960 Hz.
 """
 
 from __future__ import annotations
 
+import math
 import os
 import tempfile
 from dataclasses import dataclass
 
 import numpy as np
-from wipelab.sim.bullet import pybullet
 
 from wipelab.sim.armar3 import (PLATFORM_JOINTS, RIGHT_ARM_JOINTS, TCP_OFFSET, TORSO_JOINTS,
                                 armar3b_urdf_path)
+from wipelab.sim.bullet import pybullet
 from wipelab.sim.ft_sensor import FTSensorParams, SensorImperfections
-from wipelab.sim.kinematics import parse_urdf_joints, rotation_from_quaternion_xyzw
+from wipelab.sim.kinematics import (link_pose, parse_urdf_joints,
+                                    quaternion_xyzw_from_rotation, rotation_from_quaternion_xyzw)
 from wipelab.sim.sponge import Grasp, SpongeParams, collision_spheres, tcp_to_sponge
 from wipelab.sim.surfaces import Surface
-from wipelab.sim.urdf_edit import attach_compliant_box, drop_subtrees, freeze_joints
+from wipelab.sim.urdf_edit import attach_compliant_box, drop_subtrees, freeze_joints, subtree
 
-#: Joints simulated as joints, in the order of the controller's q: torso then right arm.
-ACTIVE_JOINTS = TORSO_JOINTS + RIGHT_ARM_JOINTS
+#: Joints simulated as joints, in the order of the controller's arm q.
+SIMULATED_JOINTS = RIGHT_ARM_JOINTS
+#: Root link of the simulated part (fixed in the world at its pose).
+SIMULATED_ROOT = "torso"
 #: Name of the sponge link and of its spring joint in the loaded URDF.
 SPONGE_LINK = "sponge"
 SPONGE_JOINT = "sponge_compression"
 #: Radius (m) of the spheres that make the sponge's collision shape.
 SPONGE_SPHERE_RADIUS = 0.008
-#: Subtrees left out of the physics (they stand still, far from the task).
-UNSIMULATED_SUBTREES = ("neck_1_pitch", "shoulder_1_l")
+#: Subtrees below the root left out of the physics: head and left arm (they stand still, far
+#: from the task) and the TCP frame (no mass; its pose follows from the hand's).
+UNSIMULATED_SUBTREES = ("neck_1_pitch", "shoulder_1_l", "tcp_r_joint")
 #: The fixed joint carrying the F/T sensor, and the link it measures (its frame = sensor frame).
 FT_JOINT = "ft_sensor_r"
+#: The link the sensor measures.
+HAND_LINK = "hand_r"
+#: Time constant (s) of the joint servos' position loop (PyBullet's position gain is per
+#: physics step: gain = 1 / (time constant * physics_hz)).
+SERVO_TIME_CONSTANT = 1.0 / 120.0
+#: Largest force (N) of the sponge's spring-damper.
+SPRING_FORCE_LIMIT = 1000.0
 
 
 def _matrix(quaternion_xyzw) -> np.ndarray:
@@ -50,11 +71,12 @@ def _matrix(quaternion_xyzw) -> np.ndarray:
 
 @dataclass(frozen=True)
 class SimConfig:
-    """Rates of the simulation."""
+    """Rates of the simulation (the physics rate follows the tool's speed, see above)."""
 
-    physics_hz: float = 240.0   # Hz: PyBullet time step 1 / physics_hz (>= 240)
-    control_hz: float = 120.0   # Hz: controller rate (>= 100); physics_hz / control_hz integer
-    solver_iterations: int = 30  # PyBullet constraint solver iterations per step
+    physics_hz: float = 240.0   # Hz: lowest physics rate (>= 240, a multiple of control_hz)
+    max_travel: float = 0.0005  # m: most TCP travel per physics step
+    control_hz: float = 120.0   # Hz: controller rate (>= 100)
+    solver_iterations: int = 10  # PyBullet constraint solver iterations per step
 
     def __post_init__(self):
         if self.physics_hz < 240 or self.control_hz < 100:
@@ -62,10 +84,14 @@ class SimConfig:
         ratio = self.physics_hz / self.control_hz
         if abs(ratio - round(ratio)) > 1e-9:
             raise ValueError("physics_hz must be an integer multiple of control_hz")
+        if not self.max_travel > 0:
+            raise ValueError("max_travel must be > 0")
 
-    @property
-    def substeps(self) -> int:
-        return int(round(self.physics_hz / self.control_hz))
+    def substeps(self, speed: float = 0.0) -> int:
+        """Physics steps per control period for a TCP moving at up to ``speed`` (m/s): the
+        fewest, at least physics_hz / control_hz, with at most ``max_travel`` per step."""
+        return max(int(round(self.physics_hz / self.control_hz)),
+                   math.ceil(speed / (self.max_travel * self.control_hz) - 1e-9))
 
     @property
     def dt(self) -> float:
@@ -89,7 +115,7 @@ class BasePose:
 class StepResult:
     """What one control period produced (true values; the controller only sees ``wrench``)."""
 
-    q: np.ndarray                  # (10,) measured joint positions (rad), ACTIVE_JOINTS order
+    q: np.ndarray                  # (7,) measured arm joint positions (rad), SIMULATED_JOINTS
     wrench: np.ndarray             # (6,) F/T reading (N, N m), sensor frame, bias + noise
     sensor_rotation: np.ndarray    # (3, 3) sensor orientation in the world (from kinematics)
     sponge_force: float            # N: true total normal force surface -> sponge (period mean)
@@ -145,7 +171,7 @@ class SimWorld:
     ----------
     surface : Surface
     torso : array, shape (3,)
-        Torso joint values (rad) at which the arm starts (the IK may move them).
+        Torso joint values (rad), held during the task.
     arm : array, shape (7,)
         Right-arm joint values (rad) at the start.
     reference_rotation : array, shape (3, 3)
@@ -162,22 +188,23 @@ class SimWorld:
         self.surface, self.base, self.sponge, self.grasp, self.config = (surface, base, sponge,
                                                                           grasp, config)
         self.urdf_text = armar3b_urdf_path().read_text()
+        self.torso = np.asarray(torso, dtype=float).copy()
         self.tcp_from_sponge = tcp_to_sponge(grasp, np.asarray(reference_rotation))
         hand_to_tcp = np.eye(4)
         hand_to_tcp[0, 3] = TCP_OFFSET
-        held = base.joint_values()
-        text = drop_subtrees(freeze_joints(self.urdf_text, ACTIVE_JOINTS, held),
-                             UNSIMULATED_SUBTREES)
-        text = attach_compliant_box(text, "hand_r", hand_to_tcp @ self.tcp_from_sponge,
+        held = {**base.joint_values(), **dict(zip(TORSO_JOINTS, self.torso))}
+        text = freeze_joints(self.urdf_text, SIMULATED_JOINTS, held)
+        text = drop_subtrees(subtree(text, SIMULATED_ROOT), UNSIMULATED_SUBTREES)
+        text = attach_compliant_box(text, HAND_LINK, hand_to_tcp @ self.tcp_from_sponge,
                                     SPONGE_LINK, sponge.size, sponge.mass,
                                     sponge.max_compression,
                                     collision_spheres(sponge.size, SPONGE_SPHERE_RADIUS),
                                     SPONGE_SPHERE_RADIUS)
+        root = link_pose(self.urdf_text, SIMULATED_ROOT, held)
         self.client = pybullet.connect(pybullet.DIRECT)
         c = self.client
         pybullet.setGravity(0, 0, -9.81, physicsClientId=c)
-        pybullet.setPhysicsEngineParameter(fixedTimeStep=1.0 / config.physics_hz,
-                                           numSolverIterations=config.solver_iterations,
+        pybullet.setPhysicsEngineParameter(numSolverIterations=config.solver_iterations,
                                            deterministicOverlappingPairs=1,
                                            jointFeedbackMode=pybullet.JOINT_FEEDBACK_IN_JOINT_FRAME,
                                            physicsClientId=c)
@@ -185,9 +212,10 @@ class SimWorld:
         try:
             with os.fdopen(handle, "w") as f:
                 f.write(text)
-            self.robot = pybullet.loadURDF(path, useFixedBase=True,
-                                           flags=pybullet.URDF_USE_INERTIA_FROM_FILE,
-                                           physicsClientId=c)
+            self.robot = pybullet.loadURDF(
+                path, basePosition=root[:3, 3].tolist(),
+                baseOrientation=quaternion_xyzw_from_rotation(root[:3, :3]).tolist(),
+                useFixedBase=True, flags=pybullet.URDF_USE_INERTIA_FROM_FILE, physicsClientId=c)
         finally:
             os.unlink(path)
         self.surface_id = surface_body(c, surface)
@@ -196,24 +224,31 @@ class SimWorld:
             info = pybullet.getJointInfo(self.robot, j, physicsClientId=c)
             by_name[info[1].decode()] = j
             by_name["link:" + info[12].decode()] = j
-        self.joint_ids = [by_name[n] for n in ACTIVE_JOINTS]
+        self.joint_ids = [by_name[n] for n in SIMULATED_JOINTS]
         self.sponge_joint = by_name[SPONGE_JOINT]
         self.sponge_link = by_name["link:" + SPONGE_LINK]
         self.ft_joint = by_name[FT_JOINT]
-        self.hand_link = by_name["link:hand_r"]
-        self.tcp_link = by_name["link:tcp_r"]
-        self._pose_links = [self.hand_link, self.tcp_link, self.sponge_link]
+        self.hand_link = by_name["link:" + HAND_LINK]
+        self._pose_links = [self.hand_link, self.sponge_link]
+        self._state_joints = self.joint_ids + [self.sponge_joint]
         joints = parse_urdf_joints(self.urdf_text)
-        self.effort = np.array([joints[n].effort for n in ACTIVE_JOINTS])
+        self.effort = np.array([joints[n].effort for n in SIMULATED_JOINTS])
         pybullet.changeDynamics(self.robot, self.sponge_link, lateralFriction=surface.friction,
                                 rollingFriction=0.0, spinningFriction=0.0, physicsClientId=c)
         pybullet.changeDynamics(self.surface_id, -1, lateralFriction=1.0, physicsClientId=c)
         pybullet.setJointMotorControl2(self.robot, self.sponge_joint, pybullet.VELOCITY_CONTROL,
                                        force=0.0, physicsClientId=c)
+        pybullet.setJointMotorControl2(self.robot, self.sponge_joint, pybullet.PD_CONTROL,
+                                       targetPosition=0.0, targetVelocity=0.0,
+                                       positionGain=sponge.stiffness, velocityGain=sponge.damping,
+                                       force=SPRING_FORCE_LIMIT, physicsClientId=c)
         pybullet.enableJointForceTorqueSensor(self.robot, self.ft_joint, True, physicsClientId=c)
-        start = np.concatenate([np.asarray(torso, dtype=float), np.asarray(arm, dtype=float)])
+        start = np.asarray(arm, dtype=float)
         for j, value in zip(self.joint_ids, start):
             pybullet.resetJointState(self.robot, j, value, physicsClientId=c)
+        self._effort = self.effort.tolist()
+        self._velocity_gains = [1.0] * len(start)
+        self.set_tool_speed(0.0)
         self.targets = start.copy()
         self.command(start)
         self.imperfections = SensorImperfections(sensor, np.random.default_rng(seed))
@@ -234,55 +269,71 @@ class SimWorld:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def command(self, q, velocity=None) -> None:
-        """Joint position targets (10,) (rad), ACTIVE_JOINTS order, with the joint velocities
-        (10,) (rad/s) of the commanded motion as feed-forward (zero if None): the joint
-        servos then follow a moving target without the lag of a pure position loop."""
-        self.targets = np.asarray(q, dtype=float).copy()
-        velocity = [0.0] * len(q) if velocity is None else np.asarray(velocity, float).tolist()
-        pybullet.setJointMotorControlArray(self.robot, self.joint_ids, pybullet.POSITION_CONTROL,
-                                           targetPositions=self.targets.tolist(),
-                                           targetVelocities=velocity,
-                                           forces=self.effort.tolist(),
-                                           positionGains=[0.5] * len(q),
-                                           velocityGains=[1.0] * len(q),
+    def set_tool_speed(self, speed: float) -> None:
+        """Step the physics fast enough for a TCP moving at up to ``speed`` (m/s) (see
+        :meth:`SimConfig.substeps`)."""
+        self.substeps = self.config.substeps(speed)
+        self.physics_hz = self.substeps * self.config.control_hz
+        pybullet.setPhysicsEngineParameter(fixedTimeStep=1.0 / self.physics_hz,
                                            physicsClientId=self.client)
+        # position loop: time constant SERVO_TIME_CONSTANT whatever the physics rate
+        self._gains = [1.0 / (SERVO_TIME_CONSTANT * self.physics_hz)] * len(self.joint_ids)
+
+    def command(self, q, velocity=None) -> None:
+        """Arm joint position targets (7,) (rad), SIMULATED_JOINTS order, for the end of the
+        next control period, and the joint velocities (7,) (rad/s) of the planned motion.
+
+        As a robot's joint controller does, :meth:`step` interpolates from the previous
+        targets to these linearly at the physics rate, and the servos get ``velocity`` as
+        feed-forward (zero if None): they follow the planned motion without lag, and
+        corrections outside it (the force feedback's) through their position loop.
+        """
+        self._start = self.targets
+        self.targets = np.asarray(q, dtype=float).copy()
+        self._velocity = ([0.0] * self.targets.size if velocity is None
+                          else np.asarray(velocity, dtype=float).tolist())
 
     def step(self) -> StepResult:
         """Run one control period of physics; return the measurements at its end."""
-        c, robot, sponge_joint, ft_joint = self.client, self.robot, self.sponge_joint, self.ft_joint
-        k, damping = self.sponge.stiffness, self.sponge.damping
-        wrench = [0.0] * 6
+        c, robot, ft_joint = self.client, self.robot, self.ft_joint
+        surface_id, sponge_link = self.surface_id, self.sponge_link
+        n = self.substeps
+        # the servos' targets at each physics step: linear from the last targets to the new
+        fractions = np.arange(1, n + 1)[:, None] / n
+        targets = (self._start + fractions * (self.targets - self._start)).tolist()
+        servo = dict(targetVelocities=self._velocity, forces=self._effort,
+                     positionGains=self._gains, velocityGains=self._velocity_gains,
+                     physicsClientId=c)
+        wrench = np.zeros(6)
         sponge_force = hand_force = 0.0
-        n = self.config.substeps
-        for _ in range(n):
-            position, velocity = pybullet.getJointState(robot, sponge_joint,
-                                                        physicsClientId=c)[:2]
-            pybullet.setJointMotorControl2(robot, sponge_joint, pybullet.TORQUE_CONTROL,
-                                           force=-k * position - damping * velocity,
-                                           physicsClientId=c)
-            if self.external_force.any():
-                centre = pybullet.getLinkState(robot, self.sponge_link, physicsClientId=c)[0]
-                pybullet.applyExternalForce(robot, self.sponge_link, self.external_force.tolist(),
+        pushed = bool(self.external_force.any())
+        for target in targets:
+            pybullet.setJointMotorControlArray(robot, self.joint_ids, pybullet.POSITION_CONTROL,
+                                               targetPositions=target, **servo)
+            if pushed:
+                centre = pybullet.getLinkState(robot, sponge_link, physicsClientId=c)[0]
+                pybullet.applyExternalForce(robot, sponge_link, self.external_force.tolist(),
                                             centre, pybullet.WORLD_FRAME, physicsClientId=c)
             pybullet.stepSimulation(physicsClientId=c)
-            reaction = pybullet.getJointState(robot, ft_joint, physicsClientId=c)[2]
-            wrench = [a + b for a, b in zip(wrench, reaction)]
-            for point in pybullet.getContactPoints(robot, self.surface_id, physicsClientId=c):
-                if point[3] == self.sponge_link:
+            wrench += pybullet.getJointState(robot, ft_joint, physicsClientId=c)[2]
+            for point in pybullet.getContactPoints(robot, surface_id, physicsClientId=c):
+                if point[3] == sponge_link:
                     sponge_force += point[9]
                 else:
                     hand_force += point[9]
         self.time += self.config.dt
-        states = pybullet.getJointStates(robot, self.joint_ids + [sponge_joint],
-                                         physicsClientId=c)
-        hand, tcp, sponge = pybullet.getLinkStates(robot, self._pose_links, physicsClientId=c)
+        self._start = self.targets          # reached: hold them until the next command
+        self._velocity = [0.0] * self.targets.size
+        states = pybullet.getJointStates(robot, self._state_joints, physicsClientId=c)
+        hand, sponge = pybullet.getLinkStates(robot, self._pose_links, physicsClientId=c)
+        hand_rotation = _matrix(hand[5])
         return StepResult(q=np.array([s[0] for s in states[:-1]]),
-                          wrench=self.imperfections(self.reading_convention(np.array(wrench) / n)),
-                          sensor_rotation=_matrix(hand[5]),
+                          wrench=self.imperfections(self.reading_convention(wrench / n)),
+                          sensor_rotation=hand_rotation,
                           sponge_force=sponge_force / n, hand_force=hand_force / n,
-                          compression=float(states[-1][0]),
-                          tcp=np.array(tcp[4]), tcp_rotation=_matrix(tcp[5]),
+                          compression=states[-1][0],
+                          tcp=np.array(hand[4]) + TCP_OFFSET * hand_rotation[:, 0],
+                          tcp_rotation=hand_rotation,
                           sponge_position=np.array(sponge[4]), sponge_quaternion=np.array(sponge[5]))
 
     @staticmethod
@@ -292,6 +343,8 @@ class SimWorld:
         return np.asarray(reaction, dtype=float)
 
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """Actual TCP position (3,) (m) and orientation (3, 3) in the world."""
-        state = pybullet.getLinkState(self.robot, self.tcp_link, physicsClientId=self.client)
-        return np.array(state[4]), _matrix(state[5])
+        """Actual TCP position (3,) (m) and orientation (3, 3) in the world (the TCP frame is
+        the hand's, moved by TCP_OFFSET along its x axis)."""
+        state = pybullet.getLinkState(self.robot, self.hand_link, physicsClientId=self.client)
+        rotation = _matrix(state[5])
+        return np.array(state[4]) + TCP_OFFSET * rotation[:, 0], rotation

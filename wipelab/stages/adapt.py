@@ -4,13 +4,21 @@ Flow (paper Sec. III-A3, III-B2):
 
 1. The model's x-y path is placed on the table (:func:`~wipelab.sim.path.place_model`:
    centre of its bounding box at ``center``, default the surface's wiping centre) and slowed
-   down: Omega is divided by ``slowdown``.
+   down: Omega is divided by ``slowdown``. The adapted model has ``kernels`` kernels (50 by
+   default, twice the learn stage's 25: a surface's height profile has sharper features than
+   a hand's wiping path, and the locally constant fit of eqs. 13-15 smooths it by about a
+   kernel width); the x-y path is refitted onto them (:func:`~wipelab.sim.path.with_kernels`,
+   its error is in ``metrics.json``, a few hundredths of a millimetre).
 2. The hand goes above the start of the path, identifies its payload (F/T gravity
    compensation), then the movement starts with active compliance in z (eqs. 9-12): without
    contact the hand moves down at the velocity cap until the sponge presses with F_0.
 3. In every control period the commanded height Y (eq. 10) is learned as a new DOF z of the
-   DMP, anchored to the x-y phase (eqs. 13-15). Learning stops when the learned waveform
-   changes by less than ``tolerance`` over a period (the convergence criterion of
+   DMP, anchored to the x-y phase (eqs. 13-15). The reference Y_r of eq. 10 is the start
+   height in the first period; from the second on it is the profile learned so far (the
+   default ``reference="learned"``, see
+   :class:`~wipelab.control.force_profile.ProfileLearningParams`; ``"start"`` keeps the
+   paper's constant Y_r). Learning stops when the learned waveform changes by less than
+   ``tolerance`` over a period (the convergence criterion of
    :class:`~wipelab.control.force_profile.ConvergenceMonitor`) or after ``periods`` periods.
 4. ``hold_periods`` more periods run the learned profile with compliance on top (the end of
    learning is marked in the logs, as the dashed line of the paper's Figs. 6-7).
@@ -38,7 +46,8 @@ from wipelab.logs import StageRecorder
 from wipelab.manifest import build_manifest, sha256_file, write_json
 from wipelab.sim.metrics import coverage, force_metrics, profile_error
 from wipelab.sim.model_file import read_model
-from wipelab.sim.path import PathGenerator, place_model, require_dofs
+from wipelab.sim.path import (PathGenerator, place_model, refit_error, require_dofs,
+                              with_kernels)
 from wipelab.sim.recording import Segment, log_run, wiping_blueprint
 from wipelab.sim.session import SafetyStop
 from wipelab.sim.sponge import SpongeParams
@@ -68,6 +77,7 @@ class AdaptParams:
     base: tuple[float, float, float] = (0.0, 0.0, 0.0)  # [--base] x, y (m), yaw (rad)
     sponge_stiffness: float = 1000.0   # [--sponge-stiffness] N/m
     seed: int = 0                      # [--seed] sensor noise
+    kernels: int = 50                  # [--kernels] N of the adapted model (x-y refitted)
     learning: ProfileLearningParams = field(default_factory=ProfileLearningParams)
 
     def task_options(self) -> TaskOptions:
@@ -85,6 +95,8 @@ class AdaptParams:
             raise InputError(f"--slowdown: must be >= 1, got {self.slowdown}")
         if not (self.periods >= 1 and self.hold_periods >= 0):
             raise InputError("--periods must be >= 1 and --hold-periods >= 0")
+        if not 5 <= self.kernels <= 200:
+            raise InputError(f"--kernels: must be in [5, 200], got {self.kernels}")
         if not 0 < self.amplitude_scale <= 3:
             raise InputError(f"--amplitude-scale: must be in (0, 3], got {self.amplitude_scale}")
 
@@ -118,15 +130,19 @@ def _learn(task: WipingTask, model: PeriodicModel, params: AdaptParams, quiet: b
     monitor = ConvergenceMonitor(params.learning)
     run = AdaptRun(learner, monitor, segments, [], omega, math.nan)
     segments.append(Segment("learning", LEARN, session.time))
+    task.world.set_tool_speed(path.max_speed(omega))
     period_steps = int(math.ceil(2.0 * math.pi / (omega * dt)))
     total = period_steps * (params.periods + params.hold_periods)
+    reference = None   # Y_r: the start height, or (reference "learned") the profile so far
     with tqdm(total=total, desc="adapt", unit="step", disable=quiet, leave=False) as bar:
         try:
             period_end = 2.0 * math.pi
             while monitor.periods_ < params.periods and not monitor.converged:
-                xy, acceleration = path.step(omega, dt)
-                session.tick(xy, task.start_height, True, path.phase,
-                             np.append(acceleration, 0.0), LEARN)
+                xy, velocity, acceleration = path.step(omega, dt)
+                z = (np.array([task.start_height, 0.0, 0.0]) if reference is None else
+                     np.concatenate(reference.step(omega, dt)))
+                session.tick(xy, z[0], True, path.phase, velocity=np.append(velocity, z[1]),
+                             acceleration=np.append(acceleration, z[2]), mode=LEARN)
                 learner.update(session.trace.last("tcp_cmd")[2], path.phase, omega)
                 bar.update()
                 if path.phase >= period_end:
@@ -134,17 +150,25 @@ def _learn(task: WipingTask, model: PeriodicModel, params: AdaptParams, quiet: b
                     profile = learner.waveform(COMPARISON_PHASES)
                     monitor.end_of_period(profile)
                     run.profiles.append((session.time, profile))
+                    if params.learning.reference == "learned":
+                        reference = PathGenerator(adapted_model(model, learner, {}, None),
+                                                  ("z",), phase=path.phase)
+                        # Y of eq. 10 continues where it is: the offset takes the difference
+                        session.integrator.offset_ = session.trace.last("tcp_cmd")[2] - \
+                            reference.position[0]
             run.end_of_learning = session.time
             segments.append(Segment("learned profile", HOLD, session.time))
             adapted = adapted_model(model, learner, {}, None)
             replay = PathGenerator(adapted, ("x", "y", "z"), phase=path.phase)
+            task.world.set_tool_speed(replay.max_speed(omega))
             z_now = session.trace.last("tcp_cmd")[2]
             # continuity at the switch: compliance keeps the small difference and corrects it
             session.integrator.offset_ = z_now - replay.position[2]
             hold_end = path.phase + 2.0 * math.pi * params.hold_periods
             while replay.phase < hold_end:
-                position, acceleration = replay.step(omega, dt)
-                session.tick(position[:2], position[2], True, replay.phase, acceleration, HOLD)
+                position, velocity, acceleration = replay.step(omega, dt)
+                session.tick(position[:2], position[2], True, replay.phase, velocity=velocity,
+                             acceleration=acceleration, mode=HOLD)
                 bar.update()
         except SafetyStop as stop:
             run.stop_reason = str(stop)
@@ -239,7 +263,8 @@ def run_adapt(model_path: str | os.PathLike, out_dir: str | os.PathLike,
     surface = load_surface(params.surface)
     options = params.task_options()
     centre = surface.wipe_center if params.center is None else np.asarray(params.center)
-    placed = place_model(model, centre, params.amplitude_scale)
+    as_learned = place_model(model, centre, params.amplitude_scale)
+    placed = with_kernels(as_learned, params.kernels)
     parameters = json_parameters(params)
     task = build_task(placed, surface, options, str(model_path))
     try:
@@ -252,6 +277,8 @@ def run_adapt(model_path: str | os.PathLike, out_dir: str | os.PathLike,
                          "target_force_n": params.force, "feedback": params.feedback}
         adapted = adapted_model(placed, run.learner, source, surface_entry)
         metrics = _metrics(task, run, trace, adapted, params)
+        metrics["kernels"] = {"model": model.kernels, "adapted": adapted.kernels,
+                              "xy_refit_error_m": refit_error(as_learned, placed, ("x", "y"))}
         inputs = {"model": model_path}
         if Path(params.surface).suffix.lower() == ".toml":
             inputs["surface"] = Path(params.surface)

@@ -128,13 +128,17 @@ def _run_one(task: WipingTask, model: PeriodicModel, omega: float, mode: str, la
     try:
         _lower_onto(task, start[:2], start[2] if learned else reference, label)
         session.integrator.offset_ = 0.0
+        task.world.set_tool_speed(path.max_speed(omega))
         motion_start = session.time
         score_from = motion_start + params.warmup_periods * period
         while path.phase < end_phase:
-            position, acceleration = path.step(omega, dt)
+            position, velocity, acceleration = path.step(omega, dt)
             z_ref = position[2] if learned else reference
-            acc = np.append(acceleration[:2], acceleration[2] if learned else 0.0)
-            session.tick(position[:2], z_ref, compliance_on, path.phase, acc, label)
+            vz, az = (velocity[2], acceleration[2]) if learned else (0.0, 0.0)   # z_r moves?
+            session.tick(position[:2], z_ref, compliance_on, path.phase,
+                         velocity=np.array([velocity[0], velocity[1], vz]),
+                         acceleration=np.array([acceleration[0], acceleration[1], az]),
+                         mode=label)
             bar.update()
     except SafetyStop as error:
         stop = str(error)

@@ -18,9 +18,9 @@ def newton_step(gradient: np.ndarray, hessian: np.ndarray, scale: np.ndarray,
                 max_step: float) -> np.ndarray:
     """Ascent step for a local quadratic model.
 
-    The Newton step where the Hessian is negative definite; elsewhere a gradient step
-    scaled by the magnitude of the curvature along each axis. Each component is clipped to
-    ``max_step * scale``.
+    The Newton step where it climbs (the model curves down along it); elsewhere a gradient
+    step scaled by the magnitude of the curvature along each axis. Each component is
+    clipped to ``max_step * scale``.
 
     Parameters
     ----------
@@ -31,9 +31,11 @@ def newton_step(gradient: np.ndarray, hessian: np.ndarray, scale: np.ndarray,
     max_step : float
         Largest step per axis, in units of ``scale``.
     """
-    if np.linalg.eigvalsh(hessian).max() < 0:
+    try:
         step = -np.linalg.solve(hessian, gradient)
-    else:
+    except np.linalg.LinAlgError:
+        step = None
+    if step is None or gradient @ step <= 0 or step @ hessian @ step >= 0:
         curvature = np.maximum(np.abs(np.diag(hessian)), np.abs(gradient) / (max_step * scale))
         step = gradient / np.maximum(curvature, 1e-12)
     return np.clip(step, -max_step * scale, max_step * scale)

@@ -194,7 +194,7 @@ class SpongeTracker:
         self.calibration = calibration
         self.colour = colour
         self.params = params
-        self.coarse = SpongeTemplate.build(params.sponge, edge_spacing=0.02, face_spacing=0.025)
+        self.coarse = SpongeTemplate.build(params.sponge, edge_spacing=0.03, face_spacing=0.035)
         self.fine = SpongeTemplate.build(params.sponge, edge_spacing=0.014, face_spacing=0.016)
         T_left_track = invert_transform(calibration.T_track_left)
         size = calibration.image_size
