@@ -83,8 +83,8 @@ def frequency_tables() -> None:
 
     rows = []
     step_systems = {name: SYSTEMS[name] for name in DEFAULTS}
-    step_systems["AFS without the residual gain schedule (kappa = 0)"] = OnlineParameters(
-        afs=AFSParameters(residual_gain=0.0))
+    step_systems["AFS without the gain schedule after the lock (c_L = 1, kappa = 0)"] = \
+        OnlineParameters(afs=AFSParameters(locked_coupling=1.0, residual_gain=0.0))
     for name, params in step_systems.items():
         cells = []
         for rate_hz in RATES_HZ:

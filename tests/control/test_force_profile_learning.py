@@ -43,3 +43,10 @@ def test_convergence_needs_min_periods_and_small_changes():
     assert not monitor.converged
     monitor.end_of_period(wave + 0.006)
     assert monitor.converged
+
+
+def test_reference_choice_is_checked():
+    assert ProfileLearningParams().reference == "learned"
+    assert ProfileLearningParams(reference="start").reference == "start"
+    with pytest.raises(ValueError, match="reference must be one of start, learned"):
+        ProfileLearningParams(reference="surface")

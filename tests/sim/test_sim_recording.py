@@ -49,7 +49,8 @@ def test_series_reach_rerun_with_their_times(recordings):
     assert t == pytest.approx(T)
     assert np.array(translations).reshape(-1, 3) == pytest.approx(-TRANSLATIONS, rel=1e-5)
     t, vectors = rrd_column(batched, "/replay/force_arrow", "Arrows3D:vectors")
-    assert t == pytest.approx(T) and np.array(vectors).reshape(-1, 3) == pytest.approx(VECTORS, rel=1e-5)
+    assert t == pytest.approx(T)
+    assert np.array(vectors).reshape(-1, 3) == pytest.approx(VECTORS, rel=1e-5)
 
 
 def test_quaternion_conversion_round_trips():

@@ -72,7 +72,8 @@ class ForceProfileLearner:
     """
 
     def __init__(self, n_kernels: int, width: float, alpha_s: float, beta_s: float, goal: float,
-                 amplitude: float, dt: float, params: ProfileLearningParams = ProfileLearningParams()):
+                 amplitude: float, dt: float,
+                 params: ProfileLearningParams = ProfileLearningParams()):
         self.n_kernels, self.width = int(n_kernels), float(width)
         self.alpha_s, self.beta_s = float(alpha_s), float(beta_s)
         self.goal, self.amplitude = float(goal), float(amplitude)

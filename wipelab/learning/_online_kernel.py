@@ -36,7 +36,7 @@ F_K, F_KW, F_NU, F_SCALE, F_MIN_OMEGA, F_MAX_OMEGA, F_ZERO_OMEGA, F_DWELL, F_NOR
     F_NORM_OFFSET, F_ALPHA, F_BETA, F_LAMBDA, F_WIDTH, F_WINDOW_PERIODS, F_FLOOR_OMEGA, \
     F_MAX_PHASE_STEP, F_STAT_PERIODS, F_FORGET_SAMPLES, F_CONFIRM, F_THRESHOLD, \
     F_UPDATE_SPACING, F_KAPPA, F_RESIDUAL_PERIODS, F_STABLE_PERIODS, F_TOLERANCE, \
-    F_LOCKED_COUPLING = range(27)
+    F_LOCKED_COUPLING, F_LOCK_SEARCH = range(28)
 # Indices into the integer parameter vector.
 I_KIND, I_REFERENCE, I_MEAN, I_NSUB, I_MAX_WINDOW, I_CAPACITY, I_EVERY, I_START_UP, \
     I_DECIMATION, I_MIN_LAG, I_N_TERMS = range(11)
@@ -287,8 +287,8 @@ def _run(Y, offset, dt, fp, ip, scalars, previous_u, norm_high, norm_low, norm_s
             for i in range(fit_count):
                 _normalise_locked(recent[(recent_count - fit_count + i) % recent.shape[0]], goal,
                                   amplitude, moving, offset, window_u[i])
-            phase0, series_alpha, series_beta = _locked_series(window_u, dt, omega0, ip[I_N_TERMS],
-                                                               ip[I_REFERENCE], n_sub)
+            omega0, phase0, series_alpha, series_beta = _locked_series(
+                window_u, dt, omega0, ip[I_N_TERMS], ip[I_REFERENCE], n_sub, fp[F_LOCK_SEARCH])
             if kind == AFS:
                 omegas[0] = omega0
                 phases[0] += _nearest_turn(phase0 - phases[0])
@@ -463,7 +463,7 @@ class FastOnlineLearner:
         n_osc = 1 if self.kind == AFS else 3
         n_coef = p.afs.n_terms + 1 if self.kind == AFS else 3
         layout = DetectorLayout.for_rate(dt, p.detector, p.min_frequency_hz, c.max_frequency_hz)
-        self.fp = np.zeros(27)
+        self.fp = np.zeros(28)
         self.fp[F_FORGET_SAMPLES] = p.forgetting_samples_per_period or 0.0
         self.fp[F_STAT_PERIODS] = p.statistics_periods
         self.fp[[F_K, F_KW, F_NU, F_SCALE]] = (c.coupling, c.frequency_coupling, c.learning_rate,
@@ -487,6 +487,7 @@ class FastOnlineLearner:
         self.fp[[F_CONFIRM, F_THRESHOLD, F_UPDATE_SPACING, F_STABLE_PERIODS, F_TOLERANCE]] = (
             p.detector.confirm, p.detector.threshold, p.update_spacing or 0.0,
             p.detector.stable_periods, p.detector.tolerance)
+        self.fp[F_LOCK_SEARCH] = p.lock_search
         capacity = anchor_capacity(dt, p)
         self.ip = np.zeros(11, dtype=np.int64)
         self.ip[[I_KIND, I_REFERENCE, I_MEAN, I_NSUB, I_MAX_WINDOW, I_CAPACITY]] = (

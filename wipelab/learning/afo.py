@@ -18,9 +18,9 @@ eq. 4 with the analogue of eq. 5.
 
 When the start-up detector has found the period, the learner sets the pool to the state it
 would converge to (:func:`locked_pool`): 0 Hz with the offset, the fundamental, and the
-stronger of the 2nd and 3rd harmonics. The residual gain schedule that speeds up the locked
-AFS after a frequency step slows the pool down (3.2-3.3 instead of 2.6-2.9 periods with
-kappa = 100, measured), so it is off by default here.
+stronger of the 2nd and 3rd harmonics. The gain schedule that steadies the locked AFS
+slows the pool down after a frequency step (see :mod:`wipelab.learning.oscillators`), so it
+is off by default here (c_L = 1, kappa = 0).
 """
 
 from __future__ import annotations

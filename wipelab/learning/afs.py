@@ -16,8 +16,9 @@ the top of the expected range (3 Hz for wiping), and the gains scale with the fr
 
 In the learner the approach from above is only the fallback: the start-up period detector
 normally hands the series its frequency, phase and coefficients after two periods
-(:meth:`AdaptiveFourierSeries.lock`), and the locked series then raises its coupling while
-its fit residual is large (the residual gain schedule of :mod:`wipelab.learning.oscillators`).
+(:meth:`AdaptiveFourierSeries.lock`); locked, the series couples weakly while it fits and
+strongly while its fit residual is large (the gain schedule of
+:mod:`wipelab.learning.oscillators`).
 
 ``AFSParameters.petric()`` gives the published constant gains. Several DOFs share phi and
 Omega. Integrated with explicit Euler substeps; series terms near the Nyquist frequency of
@@ -52,16 +53,17 @@ class AFSParameters:
     initial_frequency_hz: float = 3.0  # Omega(0) / 2 pi (Hz): the top of the expected range
     min_frequency_hz: float = 0.05     # Omega is kept in [min, max] (Hz)
     max_frequency_hz: float = 10.0
-    locked_coupling: float = 1.0       # c_L: once locked, K, K_Omega x (c_L + kappa E), E = mean e^2
-    residual_gain: float = 100.0       # kappa
+    locked_coupling: float = 0.3       # c_L: once locked, K, K_Omega x (c_L + kappa E), E = mean e^2
+    residual_gain: float = 200.0       # kappa
     residual_periods: float = 1.0      # E is low-passed over this many periods
 
     @classmethod
     def petric(cls) -> AFSParameters:
         """The published defaults: M = 10, nu = 2, K = K_Omega = 20, Omega(0) = 2 pi, unscaled,
-        no residual gain schedule."""
+        the same gains before and after a lock."""
         return cls(n_terms=10, coupling=20.0, frequency_coupling=20.0, learning_rate=2.0,
-                   scale_with_frequency=False, initial_frequency_hz=1.0, residual_gain=0.0)
+                   scale_with_frequency=False, initial_frequency_hz=1.0, locked_coupling=1.0,
+                   residual_gain=0.0)
 
 
 class AdaptiveFourierSeries:

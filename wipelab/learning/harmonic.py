@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba.extending import register_jitable
 from scipy.optimize import minimize_scalar
 
 from wipelab.learning.oscillators import FADE_START
@@ -218,51 +219,25 @@ def periodicity(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz: float,
                                periods=duration * f)
 
 
-#: Ridge on the normal equations of :func:`locked_series`, relative to the sample count (a
-#: guard: the fitted harmonics stay below 3/4 of the Nyquist frequency).
+#: Ridge on the normal equations of :func:`locked_series`, relative to the row count (a guard:
+#: the fitted harmonics stay below 3/4 of the Nyquist frequency).
 LOCK_RIDGE = 1e-9
+#: Golden-section steps of the frequency search in :func:`locked_series`: the bracket
+#: shrinks to 0.618^12 ~ 3e-3 of its width (6e-5 of the frequency for +- 1 %).
+LOCK_SEARCH_STEPS = 12
+#: The search fits at most this many samples (evenly strided, ending at the last one): the
+#: frequency's precision comes from the span, not the rate.
+LOCK_SEARCH_SAMPLES = 256
 
 
-def locked_series(U: np.ndarray, dt: float, omega: float, n_terms: int, reference: int,
-                  n_sub: int = 1) -> tuple[float, np.ndarray, np.ndarray]:
-    """The Fourier series of recent input at a known frequency, in a canonical system's phase.
+@register_jitable
+def _interpolated_fit(U: np.ndarray, dt: float, omega: float, terms: int, n_sub: int):
+    """Least-squares harmonic fit of the input as the oscillators see it (see locked_series).
 
-    Least squares of u_j(t) = sum_{c=0}^{K} a_cj cos(c w t) + b_cj sin(c w t) over the input
-    as the oscillators see it -- linear between samples, at the ends of their ``n_sub``
-    substeps per sample (t <= 0, the last sample at t = 0) -- then rewritten in the phase
-    phi = w t - theta that makes the reference DOF's fundamental a cosine (beta_1 = 0 for it,
-    the convention of the AFS and the AFO pool). Fitting the samples alone left a series that
-    the oscillator, fed the interpolated input, had to re-learn: at 3 Hz sampled at 30 Hz
-    that pushed Omega up to 1 % off after the hand-over (0.5 % with the substeps, measured).
-    Written with loops and numba-supported calls: the online kernel compiles this very
-    function.
-
-    Parameters
-    ----------
-    U : ndarray, shape (n, d)
-        Normalised input, one sample every dt, at least one period; oldest first.
-    dt : float
-        Sample interval (s).
-    omega : float
-        Frequency (rad/s).
-    n_terms : int
-        K, highest harmonic. Only terms the AFS weighs fully (c omega dt <= FADE_START pi,
-        see :func:`~wipelab.learning.oscillators.term_weight`) are fitted; the others are 0.
-    reference : int
-        The DOF whose fundamental defines phase 0.
-    n_sub : int
-        Oscillator substeps per sample.
-
-    Returns
-    -------
-    phase : float
-        phi at the last sample (rad, in (-pi, pi]).
-    alpha, beta : ndarray, shape (d, K + 1)
-        Cosine and sine coefficients of c phi per DOF (beta[:, 0] = 0).
+    Returns (coefficients (2 terms + 1, d): c_0, a_1, b_1, ..., residual sum of squares).
     """
     n, d = U.shape
-    observable = min(n_terms, int(FADE_START * math.pi / (omega * dt)))
-    columns = 2 * observable + 1
+    columns = 2 * terms + 1
     rows = 1 + (n - 1) * n_sub
     design = np.empty((rows, columns))
     values = np.empty((rows, d))
@@ -273,20 +248,90 @@ def locked_series(U: np.ndarray, dt: float, omega: float, n_terms: int, referenc
         for j in range(d):
             values[row, j] = U[sample, j] + fraction * (U[sample + 1, j] - U[sample, j]) \
                 if row > 0 else U[0, j]
+        cos_1, sin_1 = math.cos(angle), math.sin(angle)
+        cos_c, sin_c = 1.0, 0.0
         design[row, 0] = 1.0
-        for c in range(1, observable + 1):
-            design[row, 2 * c - 1] = math.cos(c * angle)
-            design[row, 2 * c] = math.sin(c * angle)
+        for c in range(1, terms + 1):                   # cos(c x), sin(c x) by angle addition
+            cos_c, sin_c = cos_c * cos_1 - sin_c * sin_1, sin_c * cos_1 + cos_c * sin_1
+            design[row, 2 * c - 1] = cos_c
+            design[row, 2 * c] = sin_c
     gram = design.T @ design + LOCK_RIDGE * rows * np.eye(columns)
-    coefficients = np.linalg.solve(gram, design.T @ values)                 # (2K + 1, d)
+    projection = design.T @ values
+    coefficients = np.linalg.solve(gram, projection)
+    return coefficients, (values * values).sum() - (coefficients * projection).sum()
+
+
+def locked_series(U: np.ndarray, dt: float, omega: float, n_terms: int, reference: int,
+                  n_sub: int = 1, search: float = 0.0) -> tuple[float, float, np.ndarray, np.ndarray]:
+    """Frequency, phase and Fourier series of recent input, in a canonical system's phase.
+
+    The frequency: the w in omega (1 +- search) whose least-squares harmonic fit of the
+    samples leaves the smallest residual (golden section, on at most LOCK_SEARCH_SAMPLES
+    samples). The series: least squares of
+    u_j(t) = sum_{c=0}^{K} a_cj cos(c w t) + b_cj sin(c w t) over the input as the oscillators
+    see it -- linear between samples, at the ends of their ``n_sub`` substeps per sample
+    (t <= 0, the last sample at t = 0) -- rewritten in the phase phi = w t - theta that makes
+    the reference DOF's fundamental a cosine (beta_1 = 0 for it, the convention of the AFS
+    and the AFO pool). Written with loops and numba-supported calls: the online kernel
+    compiles this very function.
+
+    Parameters
+    ----------
+    U : ndarray, shape (n, d)
+        Normalised input, one sample every dt, at least one period; oldest first.
+    dt : float
+        Sample interval (s).
+    omega : float
+        Frequency (rad/s), the centre of the search.
+    n_terms : int
+        K, highest harmonic. Only terms the AFS weighs fully (c omega dt <= FADE_START pi,
+        see :func:`~wipelab.learning.oscillators.term_weight`) are fitted; the others are 0.
+    reference : int
+        The DOF whose fundamental defines phase 0.
+    n_sub : int
+        Oscillator substeps per sample.
+    search : float
+        Relative half-width of the frequency search (0: take omega as it is).
+
+    Returns
+    -------
+    omega : float
+        The fitted frequency (rad/s).
+    phase : float
+        phi at the last sample (rad, in (-pi, pi]).
+    alpha, beta : ndarray, shape (d, K + 1)
+        Cosine and sine coefficients of c phi per DOF (beta[:, 0] = 0).
+    """
+    n, d = U.shape
+    terms = min(n_terms, int(FADE_START * math.pi / (omega * dt)))
+    if search > 0.0:
+        stride = max(1, -(-n // LOCK_SEARCH_SAMPLES))
+        strided = U[(n - 1) % stride::stride]
+        search_terms = min(terms, int(FADE_START * math.pi / (omega * dt * stride)))
+        golden = 0.5 * (math.sqrt(5.0) - 1.0)
+        low, high = omega * (1.0 - search), omega * (1.0 + search)
+        left, right = high - golden * (high - low), low + golden * (high - low)
+        left_residual = _interpolated_fit(strided, dt * stride, left, search_terms, 1)[1]
+        right_residual = _interpolated_fit(strided, dt * stride, right, search_terms, 1)[1]
+        for _ in range(LOCK_SEARCH_STEPS):
+            if left_residual <= right_residual:
+                high, right, right_residual = right, left, left_residual
+                left = high - golden * (high - low)
+                left_residual = _interpolated_fit(strided, dt * stride, left, search_terms, 1)[1]
+            else:
+                low, left, left_residual = left, right, right_residual
+                right = low + golden * (high - low)
+                right_residual = _interpolated_fit(strided, dt * stride, right, search_terms, 1)[1]
+        omega = 0.5 * (low + high)
+    coefficients = _interpolated_fit(U, dt, omega, terms, n_sub)[0]              # (2K + 1, d)
     theta = math.atan2(coefficients[2, reference], coefficients[1, reference])
     alpha = np.zeros((d, n_terms + 1))
     beta = np.zeros((d, n_terms + 1))
     for j in range(d):
         alpha[j, 0] = coefficients[0, j]
-        for c in range(1, observable + 1):
+        for c in range(1, terms + 1):
             a, b = coefficients[2 * c - 1, j], coefficients[2 * c, j]
             alpha[j, c] = a * math.cos(c * theta) + b * math.sin(c * theta)
             beta[j, c] = b * math.cos(c * theta) - a * math.sin(c * theta)
     beta[reference, 1] = 0.0
-    return -theta, alpha, beta
+    return omega, -theta, alpha, beta

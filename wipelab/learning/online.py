@@ -107,6 +107,7 @@ class OnlineParameters:
     statistics_periods: int = 1             # periods over which Omega, g and r are averaged
     start_up: bool = True                   # detect the period and hand it to the canonical system
     detector: PeriodDetectorParameters = field(default_factory=PeriodDetectorParameters)
+    lock_search: float = 0.01               # the hand-over refines Omega within +- this (relative)
     weights_every_s: float = 0.05           # interval of the weight snapshots in the history (s)
     afs: AFSParameters = field(default_factory=AFSParameters)
     afo: AFOParameters = field(default_factory=AFOParameters)
@@ -236,8 +237,8 @@ class OnlineLearner:
                                                    * self.detector.period_s_ / self.dt)))
         window = self._normalised(self.recent.last(count))
         n_terms = p.afs.n_terms if p.canonical == "afs" else 3
-        phase, alpha, beta = locked_series(window, self.dt, omega, n_terms, self.reference_dof,
-                                           self.n_sub)
+        omega, phase, alpha, beta = locked_series(window, self.dt, omega, n_terms,
+                                                  self.reference_dof, self.n_sub, p.lock_search)
         self.canonical.lock(omega, phase, alpha, beta, self.dt)
         self.frequency_statistics.restart()
         self.locked_ = True

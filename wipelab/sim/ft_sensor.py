@@ -110,8 +110,9 @@ def contact_wrench(reading: np.ndarray, rotation: np.ndarray, payload: PayloadMo
     weight = payload.mass * gravity
     force = payload.mass * np.asarray(acceleration, dtype=float) - weight \
         - rotation @ (reading[:3] - payload.force_bias)
-    torque = -rotation @ (reading[3:] - payload.torque_bias) - np.cross(rotation @ payload.com,
-                                                                       weight)
+    (cx, cy, cz), (wx, wy, wz) = rotation @ payload.com, weight     # lever x weight
+    lever_torque = np.array([cy * wz - cz * wy, cz * wx - cx * wz, cx * wy - cy * wx])
+    torque = -rotation @ (reading[3:] - payload.torque_bias) - lever_torque
     return force, torque
 
 

@@ -108,8 +108,9 @@ class WipingSession:
     def calibrate(self) -> PayloadModel:
         """Identify the payload (hand + sponge) and the sensor bias in free air.
 
-        Call with the tool clear of the surface. The wrist visits :data:`CALIBRATION_OFFSETS` around the rest posture; in each pose
-        the readings of :data:`CALIBRATION_SAMPLES` periods are averaged.
+        Call with the tool clear of the surface. The wrist visits :data:`CALIBRATION_OFFSETS`
+        around the rest posture; in each pose the readings of :data:`CALIBRATION_SAMPLES`
+        periods are averaged.
         """
         readings, rotations = [], []
         home = self.q_arm.copy()

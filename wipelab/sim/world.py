@@ -14,12 +14,13 @@ head, the left arm and the massless TCP frame (:func:`~wipelab.sim.urdf_edit.dro
 a physics step then costs about a third of the whole robot's. The logs show the whole robot.
 
 The physics rate follows the tool's speed (:meth:`SimWorld.set_tool_speed`): at most
-``max_travel`` (0.5 mm) of TCP travel per physics step, and at least 240 Hz. The sponge is a
+``max_travel`` (0.75 mm) of TCP travel per physics step, and at least 240 Hz. The sponge is a
 light (80 g) rigid block on a spring that slides over the surface on small spheres; with
 longer steps the contact solver's penetration recovery adds a normal force that grows with the
-speed (at 240 Hz and 0.47 m/s, 1.9 mm per step, |F| doubled on a bowl's wall, alternating
-between ~70 N and ~1 N from one step to the next). Learning at a quarter of the demonstrated
-speed then runs at 360 Hz, a replay at 3x at 960 Hz.
+speed (at 240 Hz and 0.47 m/s, 2 mm per step, |F| doubled on a bowl's wall, alternating
+between ~70 N and ~1 N from one step to the next; at 0.5 mm per step the force no longer
+depends on the speed, at 0.75 mm it changes by less than 0.2 N RMS). Learning at a quarter of
+the demonstrated speed then runs at 240 Hz, a replay at 3x at 720 Hz.
 """
 
 from __future__ import annotations
@@ -74,9 +75,9 @@ class SimConfig:
     """Rates of the simulation (the physics rate follows the tool's speed, see above)."""
 
     physics_hz: float = 240.0   # Hz: lowest physics rate (>= 240, a multiple of control_hz)
-    max_travel: float = 0.0005  # m: most TCP travel per physics step
+    max_travel: float = 0.00075  # m: most TCP travel per physics step
     control_hz: float = 120.0   # Hz: controller rate (>= 100)
-    solver_iterations: int = 10  # PyBullet constraint solver iterations per step
+    solver_iterations: int = 5   # PyBullet constraint solver iterations per step
 
     def __post_init__(self):
         if self.physics_hz < 240 or self.control_hz < 100:
@@ -277,7 +278,10 @@ class SimWorld:
         pybullet.setPhysicsEngineParameter(fixedTimeStep=1.0 / self.physics_hz,
                                            physicsClientId=self.client)
         # position loop: time constant SERVO_TIME_CONSTANT whatever the physics rate
-        self._gains = [1.0 / (SERVO_TIME_CONSTANT * self.physics_hz)] * len(self.joint_ids)
+        gains = [1.0 / (SERVO_TIME_CONSTANT * self.physics_hz)] * len(self.joint_ids)
+        self._servo = dict(forces=self._effort, positionGains=gains,
+                           velocityGains=self._velocity_gains, physicsClientId=self.client)
+        self._fractions = np.arange(1, self.substeps + 1)[:, None] / self.substeps
 
     def command(self, q, velocity=None) -> None:
         """Arm joint position targets (7,) (rad), SIMULATED_JOINTS order, for the end of the
@@ -297,19 +301,16 @@ class SimWorld:
         """Run one control period of physics; return the measurements at its end."""
         c, robot, ft_joint = self.client, self.robot, self.ft_joint
         surface_id, sponge_link = self.surface_id, self.sponge_link
-        n = self.substeps
+        n, joints, velocity, servo = self.substeps, self.joint_ids, self._velocity, self._servo
         # the servos' targets at each physics step: linear from the last targets to the new
-        fractions = np.arange(1, n + 1)[:, None] / n
-        targets = (self._start + fractions * (self.targets - self._start)).tolist()
-        servo = dict(targetVelocities=self._velocity, forces=self._effort,
-                     positionGains=self._gains, velocityGains=self._velocity_gains,
-                     physicsClientId=c)
+        targets = (self._start + self._fractions * (self.targets - self._start)).tolist()
         wrench = np.zeros(6)
         sponge_force = hand_force = 0.0
         pushed = bool(self.external_force.any())
         for target in targets:
-            pybullet.setJointMotorControlArray(robot, self.joint_ids, pybullet.POSITION_CONTROL,
-                                               targetPositions=target, **servo)
+            pybullet.setJointMotorControlArray(robot, joints, pybullet.POSITION_CONTROL,
+                                               targetPositions=target, targetVelocities=velocity,
+                                               **servo)
             if pushed:
                 centre = pybullet.getLinkState(robot, sponge_link, physicsClientId=c)[0]
                 pybullet.applyExternalForce(robot, sponge_link, self.external_force.tolist(),
@@ -334,7 +335,8 @@ class SimWorld:
                           compression=states[-1][0],
                           tcp=np.array(hand[4]) + TCP_OFFSET * hand_rotation[:, 0],
                           tcp_rotation=hand_rotation,
-                          sponge_position=np.array(sponge[4]), sponge_quaternion=np.array(sponge[5]))
+                          sponge_position=np.array(sponge[4]),
+                          sponge_quaternion=np.array(sponge[5]))
 
     @staticmethod
     def reading_convention(reaction: np.ndarray) -> np.ndarray:

@@ -139,10 +139,12 @@ def _learn(task: WipingTask, model: PeriodicModel, params: AdaptParams, quiet: b
             period_end = 2.0 * math.pi
             while monitor.periods_ < params.periods and not monitor.converged:
                 xy, velocity, acceleration = path.step(omega, dt)
-                z = (np.array([task.start_height, 0.0, 0.0]) if reference is None else
-                     np.concatenate(reference.step(omega, dt)))
-                session.tick(xy, z[0], True, path.phase, velocity=np.append(velocity, z[1]),
-                             acceleration=np.append(acceleration, z[2]), mode=LEARN)
+                z = ((task.start_height, 0.0, 0.0) if reference is None else
+                     [value[0] for value in reference.step(omega, dt)])
+                session.tick(xy, z[0], True, path.phase,
+                             velocity=np.array([velocity[0], velocity[1], z[1]]),
+                             acceleration=np.array([acceleration[0], acceleration[1], z[2]]),
+                             mode=LEARN)
                 learner.update(session.trace.last("tcp_cmd")[2], path.phase, omega)
                 bar.update()
                 if path.phase >= period_end:
