@@ -13,7 +13,7 @@ beside two baselines; simulation speed.
    "start"``).
 3. The replay stage at frequency scales 1, 2 and 3 of each adapted model, all four modes: the
    learned profile alone, with compliance on top, and the baselines compliance alone and the
-   planar (unadapted) path.
+   planar (unadapted) path; and at 1x and 3x the profiles learned with the paper's Y_r.
 4. Speed: simulated seconds per wall-clock second (and per CPU second of the process, which
    the other jobs of a shared machine do not inflate) of the control loop alone (headless, no
    logging; median of three runs) and of each stage with its MCAP/Rerun logging, run in this
@@ -134,7 +134,7 @@ def main() -> None:
     work.mkdir(parents=True, exist_ok=True)
     model_path = learn_model(work)
 
-    learning_rows, replay_rows, speed_rows = [], [], []
+    learning_rows, replay_rows, paper_rows, speed_rows = [], [], [], []
     for surface in args.surfaces:
         for reference in ("learned", "start"):
             out = work / f"adapt_{surface}" if reference == "learned" else \
@@ -157,6 +157,18 @@ def main() -> None:
             if reference == "learned":
                 speed_rows.append(speed_row(f"adapt {surface} (stage, with logging)",
                                             m["sim_time_s"], wall, cpu))
+
+        paper = run_replay(work / f"adapt_{surface}_paper" / "adapted_model.json",
+                           work / f"replay_{surface}_paper",
+                           ReplayParams(frequency_scales=(1.0, 3.0),
+                                        modes=("learned", "learned+compliance"),
+                                        periods=args.periods), quiet=True)
+        for scale, runs in paper["scales"].items():
+            for mode, run in runs.items():
+                paper_rows.append([surface, f"{scale}x", mode,
+                                   f"{run.get('rms_force_error_n', float('nan')):.2f}",
+                                   f"{100 * run['contact_fraction']:.1f}",
+                                   f"{run.get('peak_force_n', float('nan')):.1f}"])
 
         out_replay = work / f"replay_{surface}"
         r, wall, cpu = timed(run_replay, work / f"adapt_{surface}" / "adapted_model.json",
@@ -184,6 +196,10 @@ def main() -> None:
           f"3x, contact >= 99 %, peak <= {3 * F0:g} N)")
     print(table(["surface", "scale", "mode", "RMS(|F|-F0) N", "contact %", "peak N",
                  "coverage %", "safety"], replay_rows))
+
+    print("\nReplay of the profiles learned with the paper's constant Y_r (reference 'start')")
+    print(table(["surface", "scale", "mode", "RMS(|F|-F0) N", "contact %", "peak N"],
+                paper_rows))
 
     loops = [loop_speed(model_path) for _ in range(3)]
     wall_speed = statistics.median(s for s, _ in loops)

@@ -116,6 +116,7 @@ def test_parallel_processes(in_processes):
 @pytest.mark.slow
 def test_dask_cluster_on_loopback(on_dask):
     check_summary(*on_dask)
+    assert on_dask[1].stderr == ""  # -q: the table (on stdout) says it all
 
 
 @pytest.mark.slow

@@ -82,7 +82,7 @@ def dataset(ctx: click.Context, data_dir: Path, pipeline_file: Path, jobs: int,
     with tqdm(total=len(tasks), unit="demo", desc="dataset", disable=quiet) as bar:
         def on_result(result) -> None:
             bar.update(1)
-            if not result.ok:
+            if not result.ok and not quiet:
                 bar.write(f"failed {result.demo}: {result.error}", file=sys.stderr)
 
         results = run_dataset(tasks, jobs=jobs, scheduler=scheduler, on_result=on_result)
@@ -90,8 +90,9 @@ def dataset(ctx: click.Context, data_dir: Path, pipeline_file: Path, jobs: int,
     write_summary_csv(summary, results)
     click.echo(format_summary(results))
     failed = [result.demo for result in results if not result.ok]
-    click.echo(f"{len(results) - len(failed)} of {len(results)} demos ok; summary: {summary}",
-               err=True)
+    if not quiet:
+        click.echo(f"{len(results) - len(failed)} of {len(results)} demos ok; summary: "
+                   f"{summary}", err=True)
     if failed:
         ctx.exit(1)
 

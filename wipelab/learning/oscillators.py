@@ -51,6 +51,7 @@ R_FADE = 0.1
 #: Omega crossed it: at 3 Hz sampled at 30 Hz the 5th harmonic sits exactly on Nyquist, and
 #: its switching threw the locked AFS off by up to 18 % (measured).
 FADE_START = 0.75
+_FADE_SLOPE = 1.0 / ((1.0 - FADE_START) * math.pi)
 
 DOF_COUPLINGS = ("mean", "reference")
 
@@ -107,7 +108,7 @@ def residual_step(residual: float, error: np.ndarray, omega: float, h: float, pe
 def term_weight(c_omega_dt: float) -> float:
     """Weight of a series term whose phase advances c Omega dt (rad) per sample: 1 well below
     Nyquist, 0 at or above it, linear in between (see FADE_START)."""
-    return min(max((math.pi - c_omega_dt) / ((1.0 - FADE_START) * math.pi), 0.0), 1.0)
+    return min(max((math.pi - c_omega_dt) * _FADE_SLOPE, 0.0), 1.0)
 
 
 def nearest_turn(angle: float) -> float:

@@ -1,9 +1,10 @@
-"""The ``pybullet`` module, imported without the build banner it prints on stdout.
+"""The ``pybullet`` module, imported without the build banner it prints.
 
-PyBullet's C code prints "pybullet build time: ..." with ``printf`` when it is imported; a
-command's stdout must carry only its own output. The banner is sent to ``/dev/null`` by
-pointing file descriptor 1 there during the import (and flushing C's stdio buffer before
-pointing it back, so that a buffered banner is not written later).
+PyBullet's C code prints "pybullet build time: ..." when it is imported (on stderr in the
+3.2 wheels, on stdout in some builds); a command's output must carry only its own lines. The
+banner is sent to ``/dev/null`` by pointing file descriptors 1 and 2 there during the import
+(C's stdio buffers are flushed before they are pointed back, so that a buffered banner is not
+written later). An import error still raises as usual.
 """
 
 from __future__ import annotations
@@ -15,17 +16,20 @@ import sys
 
 def _import_quietly():
     sys.stdout.flush()
-    saved = os.dup(1)
+    sys.stderr.flush()
+    saved = [os.dup(1), os.dup(2)]
     try:
         with open(os.devnull, "wb") as null:
             os.dup2(null.fileno(), 1)
+            os.dup2(null.fileno(), 2)
             try:
                 import pybullet
             finally:
                 ctypes.CDLL(None).fflush(None)
     finally:
-        os.dup2(saved, 1)
-        os.close(saved)
+        for fd, copy in zip((1, 2), saved):
+            os.dup2(copy, fd)
+            os.close(copy)
     return pybullet
 
 
