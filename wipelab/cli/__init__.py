@@ -20,6 +20,7 @@ from wipelab.errors import InputError
 #: or a cached pipeline step does not pay for importing OpenCV or PyBullet).
 COMMAND_MODULES = {
     "synth": "wipelab.cli.vision_commands",
+    "synth-dataset": "wipelab.cli.pipeline_commands",
     "track": "wipelab.cli.vision_commands",
     "learn": "wipelab.cli.learn_commands",
     "rollout": "wipelab.cli.learn_commands",

@@ -78,6 +78,3 @@ def rollout(model: Path, out_csv: Path, periods: float, frequency_hz: float | No
                          rate_hz=rate_hz, amplitude_scale=amplitude_scale,
                          goal=_numbers("--goal", goal))
     click.echo(f"{t.size} samples at {rate_hz:g} Hz ({t[-1]:.2f} s) -> {out_csv}")
-
-
-COMMANDS = [learn, rollout]

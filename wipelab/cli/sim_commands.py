@@ -145,6 +145,3 @@ def replay(model: Path, more_scales: tuple[float, ...], out_dir: Path, surface: 
                             for mode, run in runs.items())
         click.echo(f"replay {scale}x: RMS(|F|-F0) {summary}")
     click.echo(f"-> {out_dir}")
-
-
-COMMANDS = [adapt, replay]

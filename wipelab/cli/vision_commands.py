@@ -110,6 +110,3 @@ def track(demo_dir: Path, out_dir: Path, colour: str | None, hsv: str | None, ro
     if not quiet:
         click.echo(f"tracked {result.valid.sum()} of {result.valid.size} frames "
                    f"({result.frame} frame) -> {out_dir / 'track.csv'}")
-
-
-COMMANDS = [synth, track]
