@@ -87,7 +87,7 @@ def loop_speed(model_path: Path, seconds: float = 20.0) -> tuple[float, float]:
     """Sim s per wall s and per CPU s of the control loop alone: compliance + learning on the
     flat table, no logging."""
     from wipelab.control import ForceProfileLearner
-    from wipelab.sim.model_file import read_model
+    from wipelab.model_file import read_model
     from wipelab.sim.path import PathGenerator, place_model
     from wipelab.sim.surfaces import load_surface
     from wipelab.sim.task import CALIBRATION_LIFT, TaskOptions, build_task

@@ -45,7 +45,7 @@ from wipelab.learning import PeriodicModel
 from wipelab.logs import StageRecorder
 from wipelab.manifest import build_manifest, sha256_file, write_json
 from wipelab.sim.metrics import coverage, force_metrics, profile_error
-from wipelab.sim.model_file import read_model
+from wipelab.model_file import read_model
 from wipelab.sim.path import (PathGenerator, place_model, refit_error, require_dofs,
                               with_kernels)
 from wipelab.sim.recording import Segment, log_run, wiping_blueprint

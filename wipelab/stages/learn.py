@@ -19,7 +19,6 @@ Logged topics (MCAP topic = Rerun entity), time = the input's time in seconds:
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import sys
@@ -36,6 +35,7 @@ from wipelab.learning import (CANONICAL_SYSTEMS, MODEL_FORMAT, LearnHistory, Off
                               learn_online, periodicity, to_uniform)
 from wipelab.logs import StageRecorder
 from wipelab.manifest import build_manifest, sha256_file, write_json
+from wipelab.model_file import read_model
 from wipelab.stage_output import staged_output
 from wipelab.trajectory_csv import Trajectory, read_trajectory, write_trajectory
 
@@ -212,23 +212,6 @@ def _log(rec: StageRecorder, model: PeriodicModel, history: LearnHistory) -> Non
              schema={"title": "wipelab.Model", "type": "object",
                      "properties": {"format": {"const": MODEL_FORMAT}},
                      "required": ["format", "frequency_hz", "dofs", "weights"]})
-
-
-def read_model(path: str | os.PathLike) -> PeriodicModel:
-    """Load model.json; InputError naming the file if it is missing, not JSON, or not a model."""
-    path = Path(path)
-    try:
-        data = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise InputError(f"{path}: file not found") from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise InputError(f"{path}: cannot be read ({error.__class__.__name__}: {error})") from None
-    except json.JSONDecodeError as error:
-        raise InputError(f"{path}: not JSON ({error})") from None
-    try:
-        return PeriodicModel.from_dict(data)
-    except ValueError as error:
-        raise InputError(f"{path}: {error}") from None
 
 
 def _per_dof(option: str, values, model: PeriodicModel) -> np.ndarray | None:

@@ -35,7 +35,7 @@ from wipelab.learning import PeriodicModel
 from wipelab.logs import StageRecorder
 from wipelab.manifest import build_manifest, write_json
 from wipelab.sim.metrics import coverage, force_metrics
-from wipelab.sim.model_file import read_model
+from wipelab.model_file import read_model
 from wipelab.sim.path import PathGenerator, dof_waveform, place_model, require_dofs
 from wipelab.sim.recording import Segment, log_run, wiping_blueprint
 from wipelab.sim.session import SafetyStop
