@@ -177,5 +177,3 @@ def view(ctx: click.Context, path: Path, separate: bool, save: Path | None, web:
         code = subprocess.run(viewer_argv(recordings, web=web)).returncode
     ctx.exit(code)
 
-
-COMMANDS = [run, dataset, synth_dataset, report, view]

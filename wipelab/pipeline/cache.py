@@ -100,7 +100,10 @@ def code_files_in_use() -> list[str]:
         path = getattr(module, "__file__", None)
         if (name == "wipelab" or name.startswith("wipelab.")) and path:
             files.add(Path(path))
-    return sorted(p.relative_to(root).as_posix() for p in files if p.is_relative_to(root))
+    # A module's file can be gone while the module stays loaded (the source was removed
+    # after import): what is not on disk cannot be checked later, so it is not recorded.
+    return sorted(p.relative_to(root).as_posix() for p in files
+                  if p.is_relative_to(root) and p.is_file())
 
 
 def stage_key(stage: str, command: str, version: str, parameters: dict[str, Any],
