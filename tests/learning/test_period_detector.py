@@ -42,7 +42,8 @@ def test_forgets_a_start_at_rest():
     t = np.arange(0, 9, 1 / rate_hz)
     moving = t >= 4.0
     Y, _ = wiping_signal(t - 4.0, frequency_hz, seed=2)
-    Y[~moving] = Y[moving][0] + 0.001 * np.random.default_rng(0).standard_normal((int((~moving).sum()), 2))
+    still = int((~moving).sum())
+    Y[~moving] = Y[moving][0] + 0.001 * np.random.default_rng(0).standard_normal((still, 2))
     found_s, detector = _first_detection(t, Y, rate_hz)
     assert (found_s - 4.0) * frequency_hz <= 2.3
     assert 1 / detector.period_s_ == pytest.approx(frequency_hz, rel=5e-3)
@@ -50,9 +51,9 @@ def test_forgets_a_start_at_rest():
 
 def test_stays_silent_on_a_random_walk():
     rng = np.random.default_rng(3)
-    t = np.arange(0, 30, 1 / 50)
+    t = np.arange(0, 30, 1 / 25)
     Y = 0.01 * np.cumsum(rng.standard_normal((t.size, 2)), axis=0)
-    found_s, detector = _first_detection(t, Y, 50.0)
+    found_s, detector = _first_detection(t, Y, 25.0)
     assert found_s is None and detector.period_s_ is None
 
 
@@ -78,7 +79,9 @@ def test_waits_for_the_far_side_of_the_dip():
     assert first_period_lag(sums, pairs, 5, 2, 0.1) == 0.0          # lags 1..4 known
     sums = np.append(sums, 3.0)
     pairs = np.ones(6, dtype=np.int64)
-    assert first_period_lag(sums, pairs, 6, 2, 0.1) == pytest.approx(4 + 0.5 * (0.1 - 3.0) / (0.1 - 0.1 + 3.0))
+    before, at, after = 0.1, 0.05, 3.0                                 # parabola through lags 3, 4, 5
+    expected = 4 + 0.5 * (before - after) / (before - 2 * at + after)
+    assert first_period_lag(sums, pairs, 6, 2, 0.1) == pytest.approx(expected)
 
 
 def test_rejects_bad_parameters():

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from wipelab.learning.derivatives import CentredDerivatives, savgol_centre_coefficients, window_for
-from wipelab.learning.normalise import PeriodStatistics, RunningNormaliser
+from wipelab.learning.normalise import PeriodStatistics, RecentSamples, RunningNormaliser
 from wipelab.learning.sampling import to_uniform
 
 
@@ -34,6 +34,38 @@ def test_centred_derivatives_pair_estimates_with_the_centre_sample():
     assert yd[0] == pytest.approx(omega * np.cos(omega * t_c), rel=1e-4)
     assert ydd[0] == pytest.approx(-omega ** 2 * np.sin(omega * t_c), rel=1e-3)
     assert t_c == pytest.approx(39 * dt - 6 * dt)                   # window 13 -> 6 samples late
+
+
+def test_estimates_between_samples_follow_the_local_polynomial():
+    dt, omega = 0.05, 2 * np.pi * 0.5
+    derivatives = CentredDerivatives(1, dt, 0.125, 4, 101)           # window of 5 samples
+    quartic = lambda t: 0.3 - 0.2 * t + 0.5 * t ** 2 + 0.1 * t ** 3 - 0.4 * t ** 4
+    for k in range(9):
+        derivatives.push(np.array([quartic(k * dt)]), phase=omega * k * dt, omega=omega)
+    y, yd, ydd, phases, omega_c = derivatives.between(omega, 4)
+    t_x = (6 + (np.arange(4) + 0.5) / 4 - 0.5) * dt                # around the centre sample 6
+    np.testing.assert_allclose(y[:, 0], quartic(t_x), atol=1e-12)
+    np.testing.assert_allclose(yd[:, 0], -0.2 + t_x + 0.3 * t_x ** 2 - 1.6 * t_x ** 3, atol=1e-9)
+    np.testing.assert_allclose(ydd[:, 0], 1.0 + 0.6 * t_x - 4.8 * t_x ** 2, atol=1e-8)
+    np.testing.assert_allclose(phases, omega * t_x)
+    centre = derivatives.centre(omega)
+    single = derivatives.between(omega, 1)
+    for a, b in zip(centre[:3], single[:3]):
+        np.testing.assert_allclose(a, b[0], atol=1e-12)
+    assert omega_c == omega
+
+
+def test_period_statistics_restart_and_recent_samples():
+    statistics = PeriodStatistics(1, 0.1, capacity=50)
+    for value in (5.0, 5.0, 5.0):
+        statistics.update(np.array([value]), 2 * np.pi)
+    statistics.restart()
+    mean, amplitude = statistics.update(np.array([1.0]), 2 * np.pi)
+    assert mean[0] == 1.0 and amplitude[0] == 0.0                     # the past is forgotten
+    recent = RecentSamples(2, 3)
+    for k in range(5):
+        recent.push(np.array([k, -k]))
+    np.testing.assert_array_equal(recent.last(3), [[2, -2], [3, -3], [4, -4]])
 
 
 def test_normaliser_waits_for_one_swing_then_maps_the_range_to_unit():

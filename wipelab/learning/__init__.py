@@ -3,11 +3,11 @@
 Layer 1, the canonical system, extracts the fundamental frequency Omega and a phase phi from
 the demonstration: the paper's pool of adaptive-frequency oscillators (eqs. 1-5,
 :mod:`~wipelab.learning.afo`) or the adaptive Fourier series of Petric et al.
-(:mod:`~wipelab.learning.afs`), started from the period that a fast detector finds in the
-first two periods (:mod:`~wipelab.learning.period_detector`). Layer 2, the output system, is a periodic DMP (eqs. 6-8,
-:mod:`~wipelab.learning.dmp`) whose weights are learned online by incremental locally
-weighted regression (eqs. 13-15, :mod:`~wipelab.learning.lwr`) or offline by regression over
-a whole recording (:mod:`~wipelab.learning.batch_fit`).
+(:mod:`~wipelab.learning.afs`), started from the period that a fast detector finds after a
+little more than two periods (:mod:`~wipelab.learning.period_detector`). Layer 2, the output
+system, is a periodic DMP (eqs. 6-8, :mod:`~wipelab.learning.dmp`) whose weights are learned
+online by incremental locally weighted regression (eqs. 13-15, :mod:`~wipelab.learning.lwr`)
+or offline by regression over a whole recording (:mod:`~wipelab.learning.batch_fit`).
 
 Notation (per DOF j; d DOFs, N kernels):
     y, yd, ydd   position (m), velocity (m/s), acceleration (m/s^2); world frame

@@ -7,6 +7,10 @@ outputs. The start-up pieces that run once or rarely (the detector's difference 
 dip search, the series fit at the hand-over, the pool's locked state) are plain-loop
 functions of their own modules, compiled here as they are. Fused into one loop over samples,
 a step costs a few microseconds instead of ~200 us.
+
+Numba's on-disk cache (``cache=True``) is keyed on this file alone: after editing a module
+whose functions are compiled into the loop (period_detector, harmonic, afo, oscillators,
+_dmp_kernel), delete ``wipelab/learning/__pycache__/*.nb[ic]``, or a stale loop runs.
 """
 
 from __future__ import annotations
@@ -24,8 +28,7 @@ from wipelab.learning.harmonic import locked_series
 from wipelab.learning.kernels import kernel_centres
 from wipelab.learning.normalise import CLIP, WARM
 from wipelab.learning.online import OnlineParameters, anchor_capacity, recent_capacity
-from wipelab.learning.oscillators import (R_FADE, REFERENCE_OMEGA, nearest_turn, substep_count,
-                                          term_weight)
+from wipelab.learning.oscillators import R_FADE, REFERENCE_OMEGA, nearest_turn, substep_count
 from wipelab.learning.period_detector import (DetectorLayout, add_block, compared_pairs,
                                               first_period_lag, stable_lag)
 
@@ -38,8 +41,8 @@ F_K, F_KW, F_NU, F_SCALE, F_MIN_OMEGA, F_MAX_OMEGA, F_ZERO_OMEGA, F_DWELL, F_NOR
     F_UPDATE_SPACING, F_KAPPA, F_RESIDUAL_PERIODS, F_STABLE_PERIODS, F_TOLERANCE, \
     F_LOCKED_COUPLING, F_LOCK_SEARCH = range(28)
 # Indices into the integer parameter vector.
-I_KIND, I_REFERENCE, I_MEAN, I_NSUB, I_MAX_WINDOW, I_CAPACITY, I_EVERY, I_START_UP, \
-    I_DECIMATION, I_MIN_LAG, I_N_TERMS = range(11)
+I_KIND, I_REFERENCE, I_MEAN, I_NSUB, I_MAX_WINDOW, I_EVERY, I_START_UP, I_DECIMATION, \
+    I_MIN_LAG, I_N_TERMS = range(10)
 # Indices into the scalar state vector.
 S_COUNT, S_PREV_PHASE, S_PREV_OMEGA, S_OMEGA, S_ZERO_TIME, S_RESETS, S_STATS_COUNT, \
     S_DERIV_COUNT, S_FREQ_COUNT, S_LOCKED, S_BLOCKS, S_IN_BLOCK, S_RECENT_COUNT, \
@@ -51,7 +54,6 @@ _stable_lag = njit(cache=True)(stable_lag)
 _locked_series = njit(cache=True)(locked_series)
 _locked_pool = njit(cache=True)(locked_pool)
 _nearest_turn = njit(cache=True)(nearest_turn)
-_term_weight = njit(cache=True)(term_weight)
 
 
 @njit(cache=True)
@@ -93,6 +95,7 @@ def _canonical_substep(kind, fp, ip, scalars, u, h, dt, phases, omegas, alpha, b
         n_terms = 0
         while n_terms < n_coef and n_terms * omegas[0] * dt < math.pi:
             n_terms += 1
+    cos_phi, sin_phi = 0.0, 0.0
     if kind == AFS:
         # cos(c phi), sin(c phi) by the angle-addition recurrence: two trig calls, not 2 M.
         cos_phi, sin_phi = math.cos(phases[0]), math.sin(phases[0])
@@ -100,10 +103,6 @@ def _canonical_substep(kind, fp, ip, scalars, u, h, dt, phases, omegas, alpha, b
         for c in range(1, n_terms):
             cosines[c] = cosines[c - 1] * cos_phi - sines[c - 1] * sin_phi
             sines[c] = sines[c - 1] * cos_phi + cosines[c - 1] * sin_phi
-        for c in range(n_terms - 1, -1, -1):           # after the recurrence: fade near Nyquist
-            weight = _term_weight(c * omegas[0] * dt)
-            cosines[c] *= weight
-            sines[c] *= weight
     else:
         for c in range(n_terms):
             cosines[c] = math.cos(phases[c])
@@ -115,7 +114,8 @@ def _canonical_substep(kind, fp, ip, scalars, u, h, dt, phases, omegas, alpha, b
         error[d] = u[d] - prediction
     for i in range(n_osc):
         column = 1 if kind == AFS else i
-        sin_phi, cos_phi = math.sin(phases[i]), math.cos(phases[i])
+        if kind == AFO:                                   # the AFS's are still those of phi
+            cos_phi, sin_phi = cosines[i], sines[i]
         total = error[reference] * sin_phi
         weight = 1.0
         if ip[I_MEAN] == 1:
@@ -208,8 +208,8 @@ def _set_anchor(mean, variance, goal, amplitude, moving):
 @njit(cache=True)
 def _run(Y, offset, dt, fp, ip, scalars, previous_u, norm_high, norm_low, norm_seen, phases, omegas,
          initial_omegas, alpha, beta, stats_reference, sums, squares, frequency_reference,
-         frequency_sums, frequency_squares, blocks, block_sums, block_pairs, block_accumulated, recent,
-         values, value_phases, value_omegas, fit_matrices, weights, P, dmp_y, dmp_s, goal,
+         frequency_sums, frequency_squares, blocks, block_sums, block_pairs, block_accumulated,
+         recent, values, value_phases, value_omegas, fit_matrices, weights, P, dmp_y, dmp_s, goal,
          amplitude, moving, centres, out_y, out_phase, out_fundamental, out_oscillators,
          snapshots):
     """Process Y (n, d) sample by sample; returns the number of weight snapshots written."""
@@ -288,7 +288,8 @@ def _run(Y, offset, dt, fp, ip, scalars, previous_u, norm_high, norm_low, norm_s
                 _normalise_locked(recent[(recent_count - fit_count + i) % recent.shape[0]], goal,
                                   amplitude, moving, offset, window_u[i])
             omega0, phase0, series_alpha, series_beta = _locked_series(
-                window_u, dt, omega0, ip[I_N_TERMS], ip[I_REFERENCE], n_sub, fp[F_LOCK_SEARCH])
+                window_u, dt, omega0, ip[I_N_TERMS], ip[I_REFERENCE], fp[F_LOCK_SEARCH])
+            phase0 += omega0 * h                       # a settled oscillator leads by one substep
             if kind == AFS:
                 omegas[0] = omega0
                 phases[0] += _nearest_turn(phase0 - phases[0])
@@ -489,10 +490,10 @@ class FastOnlineLearner:
             p.detector.stable_periods, p.detector.tolerance)
         self.fp[F_LOCK_SEARCH] = p.lock_search
         capacity = anchor_capacity(dt, p)
-        self.ip = np.zeros(11, dtype=np.int64)
-        self.ip[[I_KIND, I_REFERENCE, I_MEAN, I_NSUB, I_MAX_WINDOW, I_CAPACITY]] = (
+        self.ip = np.zeros(10, dtype=np.int64)
+        self.ip[[I_KIND, I_REFERENCE, I_MEAN, I_NSUB, I_MAX_WINDOW]] = (
             self.kind, reference_dof, int(p.dof_coupling == "mean"), substep_count(dt, p.substep_hz),
-            p.max_derivative_window, capacity)
+            p.max_derivative_window)
         self.ip[[I_START_UP, I_DECIMATION, I_MIN_LAG, I_N_TERMS]] = (
             int(p.start_up), layout.decimation, layout.min_lag, p.afs.n_terms if self.kind == AFS else 3)
         self.scalars = np.zeros(17)

@@ -15,14 +15,14 @@ the top of the expected range (3 Hz for wiping), and the gains scale with the fr
 :mod:`wipelab.learning.oscillators`).
 
 In the learner the approach from above is only the fallback: the start-up period detector
-normally hands the series its frequency, phase and coefficients after two periods
+normally hands the series its frequency, phase and coefficients after about two periods
 (:meth:`AdaptiveFourierSeries.lock`); locked, the series couples weakly while it fits and
 strongly while its fit residual is large (the gain schedule of
 :mod:`wipelab.learning.oscillators`).
 
 ``AFSParameters.petric()`` gives the published constant gains. Several DOFs share phi and
-Omega. Integrated with explicit Euler substeps; series terms near the Nyquist frequency of
-the samples are faded out (:func:`~wipelab.learning.oscillators.term_weight`).
+Omega. Integrated with explicit Euler substeps; series terms at or above the Nyquist
+frequency of the samples are switched off.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wipelab.learning.oscillators import (DOF_COUPLINGS, gain_scale, interpolated_inputs,
-                                          nearest_turn, phase_drive, residual_step, term_weight)
+                                          nearest_turn, phase_drive, residual_step)
 
 
 @dataclass(frozen=True)
@@ -53,8 +53,8 @@ class AFSParameters:
     initial_frequency_hz: float = 3.0  # Omega(0) / 2 pi (Hz): the top of the expected range
     min_frequency_hz: float = 0.05     # Omega is kept in [min, max] (Hz)
     max_frequency_hz: float = 10.0
-    locked_coupling: float = 0.3       # c_L: once locked, K, K_Omega x (c_L + kappa E), E = mean e^2
-    residual_gain: float = 200.0       # kappa
+    locked_coupling: float = 0.5       # c_L: once locked, K, K_Omega x (c_L + kappa E), E = mean e^2
+    residual_gain: float = 100.0       # kappa
     residual_periods: float = 1.0      # E is low-passed over this many periods
 
     @classmethod
@@ -99,10 +99,10 @@ class AdaptiveFourierSeries:
         p = self.params
         m = gain_scale(self.omega_, p.scale_with_frequency)
         angles = self.harmonics * self.phase_
-        # Terms at or above the Nyquist frequency of the samples cannot be observed: faded out.
-        weights = np.array([term_weight(c * self.omega_ * self.dt) for c in self.harmonics])
-        cos_c = weights * np.cos(angles)
-        sin_c = weights * np.sin(angles)
+        # Terms at or above the Nyquist frequency of the samples cannot be observed: off.
+        observable = self.harmonics * self.omega_ * self.dt < math.pi
+        cos_c = np.where(observable, np.cos(angles), 0.0)
+        sin_c = np.where(observable, np.sin(angles), 0.0)
         error = u - (self.alpha_ @ cos_c + self.beta_ @ sin_c)
         drive = phase_drive(error, self.phase_, self.alpha_[:, 1], self.beta_[:, 1],
                             self.reference, self.mean_coupling)

@@ -1,8 +1,11 @@
 """Harmonic analysis of a whole recording: fundamental frequency, phase, and periodicity.
 
-Used offline (the frequency refined over the whole recording by least squares) and by the
-learn stage to refuse input that is not periodic. All DOFs share one fundamental; they are
-pooled in physical units, so a DOF that barely moves weighs little.
+Used offline (the frequency refined over the whole recording by least squares), by the
+learn stage to refuse input that is not periodic, and by the online learner to start its
+canonical system from the last two periods once their period is known
+(:func:`locked_series`). All DOFs share one fundamental; they are pooled in physical units
+(the online learner's normalised units for :func:`locked_series`), so a DOF that barely
+moves weighs little.
 
 Model: y_j(t) = c_0j + sum_{k=1}^{K} a_kj cos(k w t) + b_kj sin(k w t), w = 2 pi f.
 """
@@ -15,8 +18,6 @@ from dataclasses import dataclass
 import numpy as np
 from numba.extending import register_jitable
 from scipy.optimize import minimize_scalar
-
-from wipelab.learning.oscillators import FADE_START
 
 #: Most harmonics a fit uses (fewer when they would pass Nyquist).
 MAX_HARMONICS = 8
@@ -219,8 +220,10 @@ def periodicity(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz: float,
                                periods=duration * f)
 
 
-#: Ridge on the normal equations of :func:`locked_series`, relative to the row count (a guard:
-#: the fitted harmonics stay below 3/4 of the Nyquist frequency).
+#: :func:`locked_series` fits the harmonics below this fraction of the Nyquist frequency of
+#: the samples (well determined by two periods); the canonical system learns the others.
+LOCK_NYQUIST_FRACTION = 0.75
+#: Ridge on the normal equations of :func:`locked_series`, relative to the row count (a guard).
 LOCK_RIDGE = 1e-9
 #: Golden-section steps of the frequency search in :func:`locked_series`: the bracket
 #: shrinks to 0.618^12 ~ 3e-3 of its width (6e-5 of the frequency for +- 1 %).
@@ -231,34 +234,27 @@ LOCK_SEARCH_SAMPLES = 256
 
 
 @register_jitable
-def _interpolated_fit(U: np.ndarray, dt: float, omega: float, terms: int, n_sub: int):
-    """Least-squares harmonic fit of the input as the oscillators see it (see locked_series).
+def _recent_fit(U: np.ndarray, dt: float, omega: float, terms: int):
+    """Least-squares harmonic fit of samples U (n, d), the last at t = 0 (see locked_series).
 
     Returns (coefficients (2 terms + 1, d): c_0, a_1, b_1, ..., residual sum of squares).
     """
     n, d = U.shape
     columns = 2 * terms + 1
-    rows = 1 + (n - 1) * n_sub
-    design = np.empty((rows, columns))
-    values = np.empty((rows, d))
-    for row in range(rows):
-        sample = (row - 1) // n_sub if row > 0 else -1       # the interval's first sample
-        fraction = ((row - 1) % n_sub + 1) / n_sub if row > 0 else 1.0
-        angle = omega * dt * (sample + fraction - n + 1)
-        for j in range(d):
-            values[row, j] = U[sample, j] + fraction * (U[sample + 1, j] - U[sample, j]) \
-                if row > 0 else U[0, j]
+    design = np.empty((n, columns))
+    for k in range(n):
+        angle = omega * dt * (k - n + 1)
         cos_1, sin_1 = math.cos(angle), math.sin(angle)
         cos_c, sin_c = 1.0, 0.0
-        design[row, 0] = 1.0
+        design[k, 0] = 1.0
         for c in range(1, terms + 1):                   # cos(c x), sin(c x) by angle addition
             cos_c, sin_c = cos_c * cos_1 - sin_c * sin_1, sin_c * cos_1 + cos_c * sin_1
-            design[row, 2 * c - 1] = cos_c
-            design[row, 2 * c] = sin_c
-    gram = design.T @ design + LOCK_RIDGE * rows * np.eye(columns)
-    projection = design.T @ values
+            design[k, 2 * c - 1] = cos_c
+            design[k, 2 * c] = sin_c
+    gram = design.T @ design + LOCK_RIDGE * n * np.eye(columns)
+    projection = design.T @ U
     coefficients = _solve_positive_definite(gram, projection)
-    return coefficients, (values * values).sum() - (coefficients * projection).sum()
+    return coefficients, (U * U).sum() - (coefficients * projection).sum()
 
 
 @register_jitable
@@ -292,18 +288,16 @@ def _solve_positive_definite(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
 
 
 def locked_series(U: np.ndarray, dt: float, omega: float, n_terms: int, reference: int,
-                  n_sub: int = 1, search: float = 0.0) -> tuple[float, float, np.ndarray, np.ndarray]:
+                  search: float = 0.0) -> tuple[float, float, np.ndarray, np.ndarray]:
     """Frequency, phase and Fourier series of recent input, in a canonical system's phase.
 
-    The frequency: the w in omega (1 +- search) whose least-squares harmonic fit of the
-    samples leaves the smallest residual (golden section, on at most LOCK_SEARCH_SAMPLES
-    samples). The series: least squares of
-    u_j(t) = sum_{c=0}^{K} a_cj cos(c w t) + b_cj sin(c w t) over the input as the oscillators
-    see it -- linear between samples, at the ends of their ``n_sub`` substeps per sample
-    (t <= 0, the last sample at t = 0) -- rewritten in the phase phi = w t - theta that makes
-    the reference DOF's fundamental a cosine (beta_1 = 0 for it, the convention of the AFS
-    and the AFO pool). Written with loops and numba-supported calls: the online kernel
-    compiles this very function.
+    Least squares of u_j(t) = sum_{c=0}^{K} a_cj cos(c w t) + b_cj sin(c w t) over the samples
+    (t <= 0, the last sample at t = 0), at the w in omega (1 +- search) that leaves the
+    smallest residual (golden section, on at most LOCK_SEARCH_SAMPLES evenly strided
+    samples), rewritten in the phase phi = w t - theta that makes the reference DOF's
+    fundamental a cosine (beta_1 = 0 for it, the convention of the AFS and the AFO pool).
+    Written with loops and numba-supported calls: the online kernel compiles this very
+    function.
 
     Parameters
     ----------
@@ -314,12 +308,10 @@ def locked_series(U: np.ndarray, dt: float, omega: float, n_terms: int, referenc
     omega : float
         Frequency (rad/s), the centre of the search.
     n_terms : int
-        K, highest harmonic. Only terms the AFS weighs fully (c omega dt <= FADE_START pi,
-        see :func:`~wipelab.learning.oscillators.term_weight`) are fitted; the others are 0.
+        K, highest harmonic. Only terms with c omega dt <= LOCK_NYQUIST_FRACTION pi are
+        fitted; the others are 0.
     reference : int
         The DOF whose fundamental defines phase 0.
-    n_sub : int
-        Oscillator substeps per sample.
     search : float
         Relative half-width of the frequency search (0: take omega as it is).
 
@@ -333,27 +325,27 @@ def locked_series(U: np.ndarray, dt: float, omega: float, n_terms: int, referenc
         Cosine and sine coefficients of c phi per DOF (beta[:, 0] = 0).
     """
     n, d = U.shape
-    terms = min(n_terms, int(FADE_START * math.pi / (omega * dt)))
+    terms = min(n_terms, int(LOCK_NYQUIST_FRACTION * math.pi / (omega * dt)))
     if search > 0.0:
         stride = max(1, -(-n // LOCK_SEARCH_SAMPLES))
-        strided = U[(n - 1) % stride::stride]
-        search_terms = min(terms, int(FADE_START * math.pi / (omega * dt * stride)))
+        strided = np.ascontiguousarray(U[(n - 1) % stride::stride])
+        search_terms = min(terms, int(LOCK_NYQUIST_FRACTION * math.pi / (omega * dt * stride)))
         golden = 0.5 * (math.sqrt(5.0) - 1.0)
         low, high = omega * (1.0 - search), omega * (1.0 + search)
         left, right = high - golden * (high - low), low + golden * (high - low)
-        left_residual = _interpolated_fit(strided, dt * stride, left, search_terms, 1)[1]
-        right_residual = _interpolated_fit(strided, dt * stride, right, search_terms, 1)[1]
+        left_residual = _recent_fit(strided, dt * stride, left, search_terms)[1]
+        right_residual = _recent_fit(strided, dt * stride, right, search_terms)[1]
         for _ in range(LOCK_SEARCH_STEPS):
             if left_residual <= right_residual:
                 high, right, right_residual = right, left, left_residual
                 left = high - golden * (high - low)
-                left_residual = _interpolated_fit(strided, dt * stride, left, search_terms, 1)[1]
+                left_residual = _recent_fit(strided, dt * stride, left, search_terms)[1]
             else:
                 low, left, left_residual = left, right, right_residual
                 right = low + golden * (high - low)
-                right_residual = _interpolated_fit(strided, dt * stride, right, search_terms, 1)[1]
+                right_residual = _recent_fit(strided, dt * stride, right, search_terms)[1]
         omega = 0.5 * (low + high)
-    coefficients = _interpolated_fit(U, dt, omega, terms, n_sub)[0]              # (2K + 1, d)
+    coefficients = _recent_fit(np.ascontiguousarray(U), dt, omega, terms)[0]     # (2K + 1, d)
     theta = math.atan2(coefficients[2, reference], coefficients[1, reference])
     alpha = np.zeros((d, n_terms + 1))
     beta = np.zeros((d, n_terms + 1))

@@ -4,9 +4,9 @@ Per sample, as a robot watching the demonstration would:
 
 1. until the period is known, feed the start-up detector
    (:mod:`~wipelab.learning.period_detector`); at the sample where it finds the period,
-   hand it over: the canonical system starts locked, with Omega = 2 pi / T and the phase and
-   series of a least-squares fit of the last two periods at that frequency
-   (:func:`~wipelab.learning.harmonic.locked_series`, :meth:`lock`);
+   hand it over: the canonical system starts locked, with the frequency, phase and series of a
+   least-squares fit of the last two periods near 2 pi / T
+   (:func:`~wipelab.learning.harmonic.locked_series`, the systems' ``lock``);
 2. update the anchor g and amplitude r (mean and sqrt(2) RMS of each DOF over the last
    period of the current Omega), normalise the input -- (y - g) / r once locked, the
    running range before -- and advance the canonical system over the sample interval (AFS,
@@ -22,31 +22,36 @@ Per sample, as a robot watching the demonstration would:
 package; :func:`learn_online` runs the same algorithm through a numba kernel
 (:mod:`wipelab.learning._online_kernel`) unless asked for the reference.
 
-All numbers below are from ``benchmarks/bench_learn.py``: two DOFs with 2nd and 3rd
-harmonics and 2 % noise; 0.3, 0.5, 1, 2, 3 Hz at 30 and 500 Hz; worst of two noise seeds.
+All numbers below are from ``benchmarks/bench_learn.py`` (two DOFs with 2nd and 3rd
+harmonics and 2 % noise; 0.3, 0.5, 1, 2, 3 Hz at 30 and 500 Hz; worst of two noise seeds)
+unless stated otherwise.
 
 Default canonical system: the AFS. With the start-up detector both systems stay within 1 %
-of the fundamental from the hand-over on: after 1.95-2.10 periods (AFS) and 2.01-2.15
-(pool), so the start does not decide. The AFS is better everywhere else: after a frequency
-step it re-converges in 2.0-2.2 periods (pool 2.6-2.9); its rollout after 10 periods is
-within 0.9-1.0 % of peak-to-peak at 500 Hz (pool 1.2-1.3 %); if no period is detected (the
-oscillators alone) it still locks in 3.9-8.7 periods (pool 3.5-11.7); and it needs no offset
-trick (the pool's eq. 4 has no constant term) nor the logic step. With the published
-constant gains (K = K_Omega = 20) and no detector, neither settles at most of these
+of the fundamental from the hand-over on, after 1.95-2.30 periods (AFS) and 2.11-2.30
+(pool): the start does not decide. The AFS is better everywhere else: after a frequency step
+it re-converges in 2.06-2.24 periods (pool 2.56-2.87); its rollout after 10 periods is within
+0.92-1.01 % of peak-to-peak at 500 Hz (pool 1.2-1.3 %); if no period is detected (the
+oscillators alone) it still locks in 3.9-8.7 periods (pool 3.5-11.7); and it needs neither
+the offset trick (the pool's eq. 4 has no constant term) nor the logic step. With the
+published constant gains (K = K_Omega = 20) and no detector, neither settles at most of these
 frequencies (see :mod:`wipelab.learning.oscillators`).
 
 Departures from the paper, each measured there:
 
 * the start-up detector and the hand-over (step 1): the oscillators alone take 3.9-8.7
-  periods (median 5.3) to stay within 1 %, and even started at the right frequency about
-  3.5, because phase and series start from nothing;
+  periods (median 5.2) to stay within 1 %, and about 3.5 even when started at the right
+  frequency, because phase and series start from nothing. The hand-over refines the
+  detector's frequency by the fit (+- 1 %) and advances the phase by one oscillator substep
+  (an Euler substep compares the input at its end with the series at its start, so a
+  settled oscillator leads by one substep); without that lead a freshly locked AFS at 3 Hz
+  sampled at 30 Hz swung up to 1 % off, with it the fundamental stays within 0.5 % of the
+  truth after the hand-over (AFS; pool 0.6 %; 30 noise seeds x 5 cases);
 * after the hand-over the input is normalised by the period statistics instead of the
-  running range: the range's relaxation (tau = 10 s) modulates the input's scale within each
-  period and kicked a freshly locked oscillator off by up to 4 %; with the statistics Omega
-  stays within 0.8 % of the truth after the hand-over (all cases, 10 noise seeds);
-* a residual gain schedule on the locked AFS (:mod:`wipelab.learning.oscillators`): after a
-  frequency step 2.0-2.2 periods instead of 2.9-3.3; the pool is slower with it (3.2-3.3
-  instead of 2.6-2.9), so it stays off there;
+  running range: the range's relaxation (tau = 10 s) modulates the input's scale within
+  each period and kicked a freshly locked oscillator off by up to 4 %;
+* a gain schedule on the locked AFS (:mod:`wipelab.learning.oscillators`): after a frequency
+  step 2.06-2.24 periods instead of 2.91-3.31; the pool is slower with it, so it is off
+  there;
 * the recursion of eqs. 13-15 regresses f_targ / r on 1 instead of f_targ on r: the same fit,
   but the prior P0 = 1 then weighs the same whatever the unit of r (with r in metres it
   outweighed ten periods of data at 30 Hz and halved the learned waveform);
@@ -54,10 +59,10 @@ Departures from the paper, each measured there:
 * the regression is updated between samples, at most half a kernel spacing apart in phase,
   from the same local polynomial (:func:`update_points`): at 3 Hz sampled at 30 Hz (ten
   phases per period for 25 kernels) the rollout error after 10 periods drops from 3.7 % to
-  2.1 % of peak-to-peak, and at 2 Hz from 2.4 % to 2.1 %; at 500 Hz one update per sample
+  2.0 % of peak-to-peak, at 2 Hz from 2.4 % to 2.0 %; at 500 Hz one update per sample
   already suffices.
 
-With them the rollout after 10 periods is within 1.1 % of the noise-free waveform's
+With them the rollout after 10 periods is within 1.0 % of the noise-free waveform's
 peak-to-peak at 0.3-3 Hz and 500 Hz, and within 2.1 % at 30 Hz.
 """
 
@@ -73,13 +78,13 @@ from wipelab.learning.afo import AdaptiveOscillatorPool, AFOParameters
 from wipelab.learning.afs import AdaptiveFourierSeries, AFSParameters
 from wipelab.learning.derivatives import CentredDerivatives
 from wipelab.learning.dmp import PeriodicDMP, forcing_target
+from wipelab.learning.harmonic import locked_series
 from wipelab.learning.kernels import default_width, kernel_activations
 from wipelab.learning.lwr import IncrementalLWR
 from wipelab.learning.model import PeriodicModel
-from wipelab.learning.harmonic import locked_series
 from wipelab.learning.normalise import PeriodStatistics, RecentSamples, RunningNormaliser
-from wipelab.learning.period_detector import PeriodDetector, PeriodDetectorParameters
 from wipelab.learning.oscillators import substep_count
+from wipelab.learning.period_detector import PeriodDetector, PeriodDetectorParameters
 
 CANONICAL_SYSTEMS = ("afs", "afo")
 
@@ -96,7 +101,7 @@ class OnlineParameters:
     forgetting: float = 0.99                # lambda of eq. 14
     forgetting_samples_per_period: float | None = 100.0  # lambda counts per 1/this of a period
     p0: float = 1.0                         # P_i(0) of eq. 14
-    update_spacing: float | None = 0.5      # LWR updates <= this x 2 pi / N apart in phase; None: 1 per sample
+    update_spacing: float | None = 0.5      # LWR updates <= this x 2 pi / N apart (phase); None: 1/sample
     dof_coupling: str = "mean"              # "mean": every moving DOF drives the phase; "reference": one
     substep_hz: float = 500.0               # oscillators integrate at >= this rate (Hz)
     normaliser_time_constant_s: float = 10.0  # tau of the running range used until the lock (s)
@@ -178,6 +183,15 @@ class OnlineLearner:
     params : OnlineParameters
     reference_dof : int
         The DOF whose fundamental defines phase 0 (a cosine peak).
+
+    Attributes
+    ----------
+    locked_ : bool
+        Whether the detected period has been handed to the canonical system.
+    omega_ : float
+        The fundamental Omega (rad/s): the oscillator's frequency averaged over the last period.
+    goal_, amplitude_ : ndarray, shape (d,)
+        g and r over the last period (m).
     """
 
     def __init__(self, n_dofs: int, dt: float, params: OnlineParameters = OnlineParameters(),
@@ -238,8 +252,10 @@ class OnlineLearner:
         window = self._normalised(self.recent.last(count))
         n_terms = p.afs.n_terms if p.canonical == "afs" else 3
         omega, phase, alpha, beta = locked_series(window, self.dt, omega, n_terms,
-                                                  self.reference_dof, self.n_sub, p.lock_search)
-        self.canonical.lock(omega, phase, alpha, beta, self.dt)
+                                                  self.reference_dof, p.lock_search)
+        # An Euler substep compares the input at its end with the series at its start phase, so
+        # a settled oscillator leads the input's phase by one substep.
+        self.canonical.lock(omega, phase + omega * self.dt / self.n_sub, alpha, beta, self.dt)
         self.frequency_statistics.restart()
         self.locked_ = True
         return window[-1]

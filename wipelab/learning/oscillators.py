@@ -12,19 +12,17 @@ s^2 + k s + k = 0 (k = K A / 2) keeps a pole near -1 rad/s however large K is.
 Gain schedule after the lock. Once a canonical system has been locked onto a detected
 period (its ``lock`` method), its coupling gains K and K_Omega are multiplied by
 c_L + kappa E, where E is the fit residual (mean e^2 over the DOFs, low-passed over about a
-period; 2-5e-4 with 2 % noise when the series fits): a small coupling when converged, a
-large one when the movement changes. The AFS gains were chosen for the descent from 3 Hz;
-kept after the lock they let Omega wander: at 3 Hz sampled at 30 Hz (ten samples per period)
-the fundamental left the 1 % band after the hand-over in 1 of 150 runs (30 noise seeds x
-5 cases; largest deviation 1.01 %, 95th percentile 0.78 %). With c_L = 0.3 and kappa = 200
-(the AFS defaults): in none (0.81 %, 0.55 %), and after the benchmark's frequency steps it
-re-converges in 1.6-3.2 periods (median 1.9) instead of 2.9-3.3. The ripple with 2 % noise
-shrinks (largest deviation over periods 6-12: 0.36 instead of 0.46 % at 3 Hz sampled at
-30 Hz); with 10 % noise it grows a little (2.6 instead of 2.4 %; unchanged at 500 Hz). The
-pool, with lower gains (K_Omega = 6), is best without it: after a step 2.6-2.9 periods,
-7.0-7.9 with c_L = 0.3, 3.3-3.5 with c_L = 0.3 and kappa = 200. Before the lock the schedule
-is off: with the large residual of an unlocked oscillator it made the fallback (no period
-detected) slower and less stable (kappa = 100: up to 11 periods, or no lock).
+period; 2-5e-4 with 2 % noise when the series fits): a weaker coupling when converged, a
+stronger one when the movement changes. Measured for the AFS with c_L = 0.5, kappa = 100
+(its defaults) against c_L = 1, kappa = 0: after the benchmark's frequency steps it
+re-converges in 2.06-2.24 instead of 2.91-3.31 periods; over 150 start-ups (30 noise seeds x
+5 cases) the fundamental's largest deviation after the hand-over is 0.47 instead of 0.56 %;
+the ripple over periods 6-12 with 2 % noise shrinks (0.42 instead of 0.46 % at 3 Hz sampled
+at 30 Hz, 0.05 instead of 0.08 % at 1 Hz and 500 Hz) and with 10 % noise is unchanged
+(2.38 and 0.40 %). The pool, with lower gains (K_Omega = 6), is best without it: after a
+step 2.6-2.9 periods, 5.2-5.9 with c_L = 0.5, 3.2-3.3 with kappa = 50. Before the lock the
+schedule is off: with the large residual of an unlocked oscillator it made the fallback (no
+period detected) slower and less stable (kappa = 100: up to 11 periods, or no lock).
 
 Several DOFs share one phase. The *reference* DOF defines it: its component at an
 oscillator's frequency is a pure cosine of that oscillator's phase (the beta coefficient is
@@ -45,13 +43,6 @@ import numpy as np
 
 #: Normalised amplitude below which a non-reference DOF's phase drive is faded out.
 R_FADE = 0.1
-
-#: A series term at harmonic c fades out linearly between c Omega dt = FADE_START pi and pi
-#: (the Nyquist frequency of the samples). A hard cut-off switched a term on and off whenever
-#: Omega crossed it: at 3 Hz sampled at 30 Hz the 5th harmonic sits exactly on Nyquist, and
-#: its switching threw the locked AFS off by up to 18 % (measured).
-FADE_START = 0.75
-_FADE_SLOPE = 1.0 / ((1.0 - FADE_START) * math.pi)
 
 DOF_COUPLINGS = ("mean", "reference")
 
@@ -103,12 +94,6 @@ def residual_step(residual: float, error: np.ndarray, omega: float, h: float, pe
     Omega, one substep of h seconds later (normalised units)."""
     rate = min(h * abs(omega) / (2.0 * math.pi * periods), 1.0)
     return residual + rate * (float(np.mean(error ** 2)) - residual)
-
-
-def term_weight(c_omega_dt: float) -> float:
-    """Weight of a series term whose phase advances c Omega dt (rad) per sample: 1 well below
-    Nyquist, 0 at or above it, linear in between (see FADE_START)."""
-    return min(max((math.pi - c_omega_dt) * _FADE_SLOPE, 0.0), 1.0)
 
 
 def nearest_turn(angle: float) -> float:
