@@ -6,24 +6,13 @@ from pathlib import Path
 
 import click
 
-from wipelab.errors import InputError
+from wipelab.cli.options import PATH, comma_separated
 
-_PATH = click.Path(path_type=Path)
-
-
-def _numbers(option: str, text: str | None) -> list[float] | None:
-    """'0.5,0.1' -> [0.5, 0.1]; InputError naming the option otherwise."""
-    if text is None:
-        return None
-    try:
-        return [float(part) for part in text.split(",")]
-    except ValueError:
-        raise InputError(f"{option}: expected comma-separated numbers, got {text!r}") from None
 
 
 @click.command("learn")
-@click.argument("trajectory", type=_PATH)
-@click.option("-o", "--output", "out_dir", type=_PATH, required=True,
+@click.argument("trajectory", type=PATH)
+@click.option("-o", "--output", "out_dir", type=PATH, required=True,
               help="Output directory: model.json, learn.mcap, learn.rrd, manifest.json.")
 @click.option("--mode", type=click.Choice(["online", "offline"]), default="online",
               show_default=True,
@@ -56,8 +45,8 @@ def learn(trajectory: Path, out_dir: Path, mode: str, dofs: str, kernels: int,
 
 
 @click.command("rollout")
-@click.argument("model", type=_PATH)
-@click.option("-o", "--output", "out_csv", type=_PATH, required=True,
+@click.argument("model", type=PATH)
+@click.option("-o", "--output", "out_csv", type=PATH, required=True,
               help="Output Trajectory CSV: t and one column per DOF.")
 @click.option("--periods", type=float, default=10.0, show_default=True,
               help="Length in periods.")
@@ -76,5 +65,5 @@ def rollout(model: Path, out_csv: Path, periods: float, frequency_hz: float | No
 
     t, _ = rollout_stage(model, out_csv, periods=periods, frequency_hz=frequency_hz,
                          rate_hz=rate_hz, amplitude_scale=amplitude_scale,
-                         goal=_numbers("--goal", goal))
+                         goal=comma_separated("--goal", goal))
     click.echo(f"{t.size} samples at {rate_hz:g} Hz ({t[-1]:.2f} s) -> {out_csv}")

@@ -12,12 +12,13 @@ from pathlib import Path
 
 import click
 
-_PATH = click.Path(path_type=Path)
+from wipelab.cli.options import PATH
+
 
 
 @click.command("run")
-@click.argument("pipeline_file", type=_PATH)
-@click.option("-o", "--output", "run_dir", type=_PATH, default=None,
+@click.argument("pipeline_file", type=PATH)
+@click.option("-o", "--output", "run_dir", type=PATH, default=None,
               help="Run directory [default: runs/<pipeline name>].")
 @click.option("--set", "sets", multiple=True, metavar="STAGE.KEY=VALUE",
               help="Override a stage parameter, e.g. --set learn.kernels=30 (repeatable).")
@@ -49,14 +50,14 @@ def run(ctx: click.Context, pipeline_file: Path, run_dir: Path | None, sets: tup
 
 
 @click.command("dataset")
-@click.argument("data_dir", type=_PATH)
-@click.option("--pipeline", "pipeline_file", type=_PATH, required=True,
+@click.argument("data_dir", type=PATH)
+@click.option("--pipeline", "pipeline_file", type=PATH, required=True,
               help="Pipeline TOML with one [inputs] entry, replaced by each demo directory.")
 @click.option("-j", "--jobs", type=int, default=1, show_default=True,
               help="Demos processed in parallel on this machine.")
 @click.option("--scheduler", metavar="ADDRESS", default=None,
               help="Dask distributed scheduler, e.g. tcp://127.0.0.1:8786 (instead of -j).")
-@click.option("-o", "--output", "out_dir", type=_PATH, default=None,
+@click.option("-o", "--output", "out_dir", type=PATH, default=None,
               help="Output directory: summary.csv and runs/<demo>/ [default: runs/dataset-<name>].")
 @click.option("--set", "sets", multiple=True, metavar="STAGE.KEY=VALUE",
               help="Override a stage parameter for every demo (repeatable).")
@@ -98,8 +99,8 @@ def dataset(ctx: click.Context, data_dir: Path, pipeline_file: Path, jobs: int,
 
 
 @click.command("report")
-@click.argument("run_dir", type=_PATH)
-@click.option("-o", "--output", "out_dir", type=_PATH, default=None,
+@click.argument("run_dir", type=PATH)
+@click.option("-o", "--output", "out_dir", type=PATH, default=None,
               help="Where to write the figures [default: RUN_DIR/report].")
 def report(run_dir: Path, out_dir: Path | None) -> None:
     """Draw PNG figures of a run (cf. the paper's Figs. 4-7) and a markdown summary."""
@@ -111,7 +112,7 @@ def report(run_dir: Path, out_dir: Path | None) -> None:
 
 
 @click.command("synth-dataset")
-@click.argument("out_dir", type=_PATH)
+@click.argument("out_dir", type=PATH)
 @click.option("--pattern", "patterns", multiple=True, default=("circle", "line", "figure8"),
               show_default=True, help="Wiping pattern (repeatable).")
 @click.option("--frequency", "frequencies_hz", multiple=True, type=float, default=(1.0,),
@@ -144,10 +145,10 @@ def synth_dataset(out_dir: Path, patterns: tuple[str, ...], frequencies_hz: tupl
 
 
 @click.command("view")
-@click.argument("path", type=_PATH)
+@click.argument("path", type=PATH)
 @click.option("--separate", is_flag=True,
               help="Open each stage's recording on its own instead of one joined recording.")
-@click.option("--save", type=_PATH, default=None,
+@click.option("--save", type=PATH, default=None,
               help="Write the joined recording (all stages, one timeline) to this .rrd and exit.")
 @click.option("--web", is_flag=True, help="Serve a web viewer instead (works without a display).")
 @click.pass_context

@@ -10,27 +10,13 @@ from pathlib import Path
 
 import click
 
-from wipelab.errors import InputError
+from wipelab.cli.options import PATH, comma_separated
 
-_PATH = click.Path(path_type=Path)
-
-
-def _pair(option: str, text: str | None, count: int):
-    """'a,b[,c]' -> tuple of floats; InputError naming the option otherwise."""
-    if text is None:
-        return None
-    try:
-        values = tuple(float(v) for v in text.split(","))
-    except ValueError:
-        values = ()
-    if len(values) != count:
-        raise InputError(f"{option}: expected {count} comma-separated numbers, got {text!r}")
-    return values
 
 
 def _common(function):
     options = [
-        click.option("-o", "--output", "out_dir", type=_PATH, required=True,
+        click.option("-o", "--output", "out_dir", type=PATH, required=True,
                      help="Output directory."),
         click.option("--surface", default=None, metavar="NAME|FILE.toml",
                      help="flat, bowl, sink or a surface TOML file."),
@@ -53,7 +39,7 @@ def _common(function):
 
 
 @click.command("adapt")
-@click.argument("model", type=_PATH)
+@click.argument("model", type=PATH)
 @_common
 @click.option("--periods", type=int, default=8, show_default=True,
               help="Most learning periods (learning stops earlier when converged).")
@@ -88,10 +74,10 @@ def adapt(model: Path, out_dir: Path, surface: str | None, force: float | None,
     from wipelab.stages.adapt import AdaptParams, run_adapt
 
     params = AdaptParams(
-        surface=surface or "flat", center=_pair("--center", center, 2),
+        surface=surface or "flat", center=comma_separated("--center", center, 2),
         amplitude_scale=amplitude_scale, slowdown=slowdown, periods=periods,
         hold_periods=hold_periods, force=10.0 if force is None else force,
-        feedback=feedback or "norm", base=_pair("--base", base, 3),
+        feedback=feedback or "norm", base=comma_separated("--base", base, 3),
         sponge_stiffness=sponge_stiffness, seed=seed, kernels=kernels,
         learning=ProfileLearningParams(tolerance=tolerance, reference=reference))
     metrics = run_adapt(model, out_dir, params, quiet=quiet)
@@ -104,7 +90,7 @@ def adapt(model: Path, out_dir: Path, surface: str | None, force: float | None,
 
 
 @click.command("replay")
-@click.argument("model", type=_PATH)
+@click.argument("model", type=PATH)
 @click.argument("more_scales", nargs=-1, type=float, metavar="")
 @_common
 @click.option("--frequency-scale", "scales", type=float, multiple=True,
@@ -137,7 +123,7 @@ def replay(model: Path, more_scales: tuple[float, ...], out_dir: Path, surface: 
     params = ReplayParams(surface=surface, frequency_scales=all_scales,
                           modes=tuple(modes) or MODES, periods=periods,
                           warmup_periods=warmup_periods, force=force, feedback=feedback,
-                          center=_pair("--center", center, 2), base=_pair("--base", base, 3),
+                          center=comma_separated("--center", center, 2), base=comma_separated("--base", base, 3),
                           sponge_stiffness=sponge_stiffness, seed=seed)
     metrics = run_replay(model, out_dir, params, quiet=quiet)
     for scale, runs in metrics["scales"].items():

@@ -6,38 +6,12 @@ from pathlib import Path
 
 import click
 
-from wipelab.errors import InputError
+from wipelab.cli.options import PATH, comma_separated
 
-_PATH = click.Path(path_type=Path)
-
-
-def _integers(option: str, text: str | None, count: int) -> tuple[int, ...] | None:
-    """'1,2,3,4' -> (1, 2, 3, 4); InputError naming the option otherwise."""
-    if text is None:
-        return None
-    try:
-        values = tuple(int(part) for part in text.split(","))
-    except ValueError:
-        values = ()
-    if len(values) != count:
-        raise InputError(f"{option}: expected {count} comma-separated integers, got {text!r}")
-    return values
-
-
-def _floats(option: str, text: str | None, count: int) -> tuple[float, ...] | None:
-    if text is None:
-        return None
-    try:
-        values = tuple(float(part) for part in text.split(","))
-    except ValueError:
-        values = ()
-    if len(values) != count:
-        raise InputError(f"{option}: expected {count} comma-separated numbers, got {text!r}")
-    return values
 
 
 @click.command("synth")
-@click.argument("out_dir", type=_PATH)
+@click.argument("out_dir", type=PATH)
 @click.option("--pattern", type=click.Choice(["circle", "line", "figure8"]), default="circle",
               show_default=True, help="Wiping pattern on the table.")
 @click.option("--frequency", "frequency_hz", type=click.FloatRange(min=0.05, max=5.0),
@@ -70,8 +44,8 @@ def synth(out_dir: Path, pattern: str, frequency_hz: float, duration: float, see
 
 
 @click.command("track")
-@click.argument("demo_dir", type=_PATH)
-@click.option("-o", "--output", "out_dir", type=_PATH, required=True,
+@click.argument("demo_dir", type=PATH)
+@click.option("-o", "--output", "out_dir", type=PATH, required=True,
               help="Output directory: track.csv, track.mcap, track.rrd, manifest.json.")
 @click.option("--color", "colour", default=None,
               help="Named sponge colour (red, orange, yellow, green, cyan, blue, purple, pink) "
@@ -102,10 +76,10 @@ def track(demo_dir: Path, out_dir: Path, colour: str | None, hsv: str | None, ro
     """
     from wipelab.stages.track import TrackParams, track as track_stage
 
-    params = TrackParams(colour=colour, hsv=hsv, roi=_integers("--roi", roi, 4),
+    params = TrackParams(colour=colour, hsv=hsv, roi=comma_separated("--roi", roi, 4, int),
                          particles=particles, seed=seed,
-                         sponge_size=_floats("--sponge-size", sponge_size, 3),
-                         area_window=_floats("--area-window", area_window, 2))
+                         sponge_size=comma_separated("--sponge-size", sponge_size, 3),
+                         area_window=comma_separated("--area-window", area_window, 2))
     result = track_stage(demo_dir, out_dir, params, quiet=quiet)
     if not quiet:
         click.echo(f"tracked {result.valid.sum()} of {result.valid.size} frames "
