@@ -10,19 +10,16 @@ import os
 from pathlib import Path
 
 from wipelab.errors import InputError
+from wipelab.input_files import read_input_text
 from wipelab.learning.model import PeriodicModel
 
 
 def read_model(path: str | os.PathLike) -> PeriodicModel:
     """Load a model file; ``InputError("<file>: <what is wrong>")`` if it is not a valid one."""
     path = Path(path)
+    text = read_input_text(path)
     try:
-        data = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise InputError(f"{path}: file not found") from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise InputError(f"{path}: not a model file, cannot be read as text "
-                         f"({error.__class__.__name__}: {error})") from None
+        data = json.loads(text)
     except json.JSONDecodeError as error:
         raise InputError(f"{path}: not a model file (not JSON: {error.msg} at line "
                          f"{error.lineno})") from None

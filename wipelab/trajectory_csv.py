@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from wipelab.errors import InputError
+from wipelab.input_files import read_input_text
 
 #: Name of the optional 0/1 column that flags usable rows.
 VALID_COLUMN = "valid"
@@ -79,12 +80,7 @@ def read_trajectory(path: str | os.PathLike, required: Sequence[str] = ("t", "x"
         rows, time not strictly increasing.
     """
     name = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise InputError(f"{name}: file not found") from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise InputError(f"{name}: cannot be read ({error.__class__.__name__}: {error})") from None
+    text = read_input_text(path, encoding="utf-8-sig")
     lines = text.splitlines()
     if not lines or not lines[0].strip():
         raise InputError(f"{name}: empty file, expected a header row like t,x,y,z")

@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from wipelab.errors import InputError
+from wipelab.input_files import read_input_text
 
 @dataclass(frozen=True)
 class CommandSignature:
@@ -221,12 +222,9 @@ def load_pipeline(path: str | os.PathLike) -> Pipeline:
     """
     path = Path(path)
     source = str(path)
+    text = read_input_text(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(f"{source}: file not found") from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise InputError(f"{source}: cannot be read ({error})") from None
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise InputError(f"{source}: not valid TOML ({error})") from None
     unknown = sorted(set(data) - {"pipeline", "inputs", "stages"})
