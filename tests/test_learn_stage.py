@@ -154,6 +154,10 @@ def _csv(path, text):
     (lambda d: _csv(d / "brief.csv", "t,x,y\n" + "".join(
         f"{k / 30},{np.cos(k / 30 * 2 * np.pi)},{np.sin(k / 30 * 2 * np.pi)}\n" for k in range(60))),
      r"brief.csv: too short, [12]\.\d periods of 1 Hz, need at least 3"),
+    (lambda d: _csv(d / "gappy.csv", "t,x,y,valid\n" + "".join(
+        f"{k / 30},{np.cos(k / 30 * np.pi)},{np.sin(k / 30 * np.pi)},{int(not 90 < k < 135)}\n"
+        for k in range(240))),
+     r"gappy.csv: online learning never locked onto a period .*--mode offline"),
 ])
 def test_bad_trajectories_exit_2_with_one_line_and_write_nothing(tmp_path, make, message):
     out = tmp_path / "out"
@@ -163,6 +167,28 @@ def test_bad_trajectories_exit_2_with_one_line_and_write_nothing(tmp_path, make,
     assert len(lines) == 1 and lines[0].startswith("error: ")
     assert re.search(message, lines[0]), lines[0]
     assert not out.exists() and not any(p.name.startswith(".out") for p in tmp_path.iterdir())
+
+
+def test_gaps_in_the_track_are_skipped_online_and_offline(tmp_path):
+    """20 s at 0.8 Hz with the sponge lost over 8-9.5 s (NaN rows flagged valid = 0)."""
+    t = np.arange(0, 20, 1 / 30)
+    Y, clean = wiping_signal(t, FREQUENCY_HZ, seed=2)
+    valid = ~((t >= 8.0) & (t < 9.5))
+    Y[~valid] = np.nan
+    path = tmp_path / "track.csv"
+    write_trajectory(path, t, {"x": Y[:, 0], "y": Y[:, 1], "valid": valid})
+    for mode in ("online", "offline"):
+        result = _run("learn", path, "-o", tmp_path / mode, "--mode", mode, "-q")
+        assert result.exit_code == 0, result.output
+        model = PeriodicModel.from_dict(json.loads((tmp_path / mode / "model.json").read_text()))
+        assert model.frequency_hz == pytest.approx(FREQUENCY_HZ, rel=2e-3), mode
+        _, y = model.rollout(t[-1] + 1 / 60, 30.0)
+        last = t >= t[-1] - 1 / FREQUENCY_HZ
+        assert waveform_rms_percent(y[last], clean[last]).max() <= 3.0, mode
+    logged_t, logged, _ = read_mcap_scalars(tmp_path / "online" / "learn.mcap", "/input/valid")
+    np.testing.assert_array_equal(logged[:, 0], valid)
+    _, hand_overs, _ = read_mcap_scalars(tmp_path / "online" / "learn.mcap", "/learner/hand_overs")
+    assert hand_overs[0, 0] == 0 and hand_overs[-1, 0] >= 1
 
 
 def test_bad_options_and_models_exit_2(demo, learned, tmp_path):

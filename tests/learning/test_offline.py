@@ -42,6 +42,27 @@ def test_figure_eight_shares_the_longer_period():
     assert fundamental_frequency_hz(t, Y, 0.1, 5.0).frequency_hz == pytest.approx(0.8, rel=1e-4)
 
 
+def test_a_gap_neither_halves_the_frequency_nor_spoils_the_periodicity():
+    """8 s of a person's line strokes at 0.6 Hz, not observed over 3-4.5 s, bridged by
+    straight lines: fitted as data, the bridge made a third of the frequency win."""
+    from wipelab.vision import WipingMotion, WipingMotionParams
+
+    t = np.arange(0, 8, 1 / 30)
+    motion = WipingMotion(WipingMotionParams("line", 0.6, amplitude=0.14), 0.8, 0.03, seed=0)
+    Y = motion.pose(t)[0][:, :2]
+    gap = (t > 3.0) & (t < 4.5)
+    for j in range(2):
+        Y[gap, j] = np.interp(t[gap], t[~gap], Y[~gap, j])
+    assert fundamental_frequency_hz(t, Y, 0.1, 5.0).frequency_hz < 0.4
+    assert fundamental_frequency_hz(t, Y, 0.1, 5.0, valid=~gap).frequency_hz == \
+        pytest.approx(0.6, rel=0.02)
+    model, _ = learn_offline(t, Y, valid=~gap)
+    assert model.frequency_hz == pytest.approx(0.6, rel=0.02)
+    aware, bridged = periodicity(t, Y, 0.1, 5.0, valid=~gap), periodicity(t, Y, 0.1, 5.0)
+    assert aware.score > 0.9 and aware.periods > 4.5
+    assert bridged.periods < 3.0                   # the learn stage would refuse it as too short
+
+
 def test_periodicity_separates_movements_from_noise_drift_and_stillness():
     rng = np.random.default_rng(3)
     t = np.arange(0, 20, 1 / 30)

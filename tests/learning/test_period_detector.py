@@ -24,7 +24,21 @@ def test_finds_the_period_within_0_5_percent_after_about_two_periods(frequency_h
     found_s, detector = _first_detection(t, Y, rate_hz)
     assert 2.0 <= found_s * frequency_hz <= 2.3
     assert 1 / detector.period_s_ == pytest.approx(frequency_hz, rel=5e-3)
-    assert not detector.update(Y[-1])                        # fires once
+
+
+def test_keeps_holding_the_period_and_restarts_after_a_gap():
+    """After the start-up it supervises: the estimate it holds follows the input; a restart
+    forgets everything and finds the period again about two periods later."""
+    rate_hz, frequency_hz = 30.0, 1.0
+    t = np.arange(0, 12, 1 / rate_hz)
+    Y, _ = wiping_signal(t, frequency_hz, seed=5)
+    detector = PeriodDetector(2, 1 / rate_hz, PeriodDetectorParameters(), 0.1, 10.0)
+    held = [detector.period_s_ for k in range(180) if detector.update(Y[k])]
+    assert len(held) > 50 and np.allclose(1 / np.array(held), frequency_hz, rtol=5e-3)
+    detector.restart()
+    assert detector.period_s_ is None
+    again = next(k for k in range(180, t.size) if detector.update(Y[k]))
+    assert 2.0 <= (again - 180) / rate_hz * frequency_hz <= 2.3
 
 
 def test_finds_the_common_period_of_a_figure_eight():

@@ -87,15 +87,28 @@ def test_period_statistics_are_exact_over_a_fractional_period():
     assert mean[0] == pytest.approx(2.0, abs=2e-3) and amplitude[0] == pytest.approx(0.5, rel=1e-2)
 
 
-def test_to_uniform_bridges_invalid_rows_and_keeps_uniform_data():
+def test_to_uniform_bridges_invalid_rows_flags_them_and_keeps_uniform_data():
     t = np.arange(10) * 0.1
     Y = np.column_stack([t, 2 * t])
-    same_t, same_Y = to_uniform(t, Y)
-    assert same_t is t and same_Y is Y
+    same_t, same_Y, same_valid = to_uniform(t, Y)
+    assert same_t is t and same_Y is Y and same_valid.all()
     valid = np.ones(10, dtype=bool)
-    valid[4] = False
+    valid[4:6] = False
     Y_bad = Y.copy()
-    Y_bad[4] = np.nan
-    t_u, Y_u = to_uniform(t, Y_bad, valid)
+    Y_bad[4:6] = np.nan
+    t_u, Y_u, valid_u = to_uniform(t, Y_bad, valid)
     np.testing.assert_allclose(t_u, t)
     np.testing.assert_allclose(Y_u, Y, atol=1e-12)
+    np.testing.assert_array_equal(valid_u, valid)
+
+
+def test_to_uniform_resamples_jittered_times_and_flags_the_grid_samples_in_a_gap():
+    rng = np.random.default_rng(3)
+    t = np.arange(40) * 0.1 + rng.uniform(-0.003, 0.003, 40)
+    t[0] = 0.0
+    valid = np.ones(40, dtype=bool)
+    valid[20:25] = False                                  # 2.0-2.4 s not observed
+    t_u, Y_u, valid_u = to_uniform(t, np.column_stack([np.sin(t)]), valid)
+    assert np.allclose(np.diff(t_u), np.median(np.diff(t)))
+    np.testing.assert_array_equal(np.flatnonzero(~valid_u), np.arange(20, 25))
+    np.testing.assert_allclose(Y_u[valid_u, 0], np.sin(t_u[valid_u]), atol=2e-3)

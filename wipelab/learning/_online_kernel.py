@@ -39,14 +39,14 @@ F_K, F_KW, F_NU, F_SCALE, F_MIN_OMEGA, F_MAX_OMEGA, F_ZERO_OMEGA, F_DWELL, F_NOR
     F_NORM_OFFSET, F_ALPHA, F_BETA, F_LAMBDA, F_WIDTH, F_WINDOW_PERIODS, F_FLOOR_OMEGA, \
     F_MAX_PHASE_STEP, F_STAT_PERIODS, F_FORGET_SAMPLES, F_CONFIRM, F_THRESHOLD, \
     F_UPDATE_SPACING, F_KAPPA, F_RESIDUAL_PERIODS, F_STABLE_PERIODS, F_TOLERANCE, \
-    F_LOCKED_COUPLING, F_LOCK_SEARCH = range(28)
+    F_LOCKED_COUPLING, F_LOCK_SEARCH, F_RELOCK = range(29)
 # Indices into the integer parameter vector.
 I_KIND, I_REFERENCE, I_MEAN, I_NSUB, I_MAX_WINDOW, I_EVERY, I_START_UP, I_DECIMATION, \
     I_MIN_LAG, I_N_TERMS = range(10)
 # Indices into the scalar state vector.
 S_COUNT, S_PREV_PHASE, S_PREV_OMEGA, S_OMEGA, S_ZERO_TIME, S_RESETS, S_STATS_COUNT, \
     S_DERIV_COUNT, S_FREQ_COUNT, S_LOCKED, S_BLOCKS, S_IN_BLOCK, S_RECENT_COUNT, \
-    S_CANONICAL_LOCKED, S_RESIDUAL, S_CANDIDATE, S_SINCE = range(17)
+    S_CANONICAL_LOCKED, S_RESIDUAL, S_CANDIDATE, S_SINCE, S_VALID_RUN, S_HAND_OVERS = range(19)
 
 _add_block = njit(cache=True)(add_block)
 _first_period_lag = njit(cache=True)(first_period_lag)
@@ -206,13 +206,14 @@ def _set_anchor(mean, variance, goal, amplitude, moving):
 
 
 @njit(cache=True)
-def _run(Y, offset, dt, fp, ip, scalars, previous_u, norm_high, norm_low, norm_seen, phases, omegas,
+def _run(Y, valid, offset, dt, fp, ip, scalars, previous_u, norm_high, norm_low, norm_seen, phases, omegas,
          initial_omegas, alpha, beta, stats_reference, sums, squares, frequency_reference,
          frequency_sums, frequency_squares, blocks, block_sums, block_pairs, block_accumulated,
          recent, values, value_phases, value_omegas, fit_matrices, weights, P, dmp_y, dmp_s, goal,
          amplitude, moving, centres, out_y, out_phase, out_fundamental, out_oscillators,
-         snapshots):
-    """Process Y (n, d) sample by sample; returns the number of weight snapshots written."""
+         out_hand_overs, snapshots):
+    """Process Y (n, d) sample by sample (rows not ``valid`` are gaps); returns the number of
+    weight snapshots written."""
     n, n_dofs = Y.shape
     kind = ip[I_KIND]
     n_sub = ip[I_NSUB]
@@ -246,9 +247,19 @@ def _run(Y, offset, dt, fp, ip, scalars, previous_u, norm_high, norm_low, norm_s
         if count == 0:
             dmp_y[:] = y
             dmp_s[:] = 0.0
-        # 1. start-up period detector (until the hand-over)
+        # 1. the period detector: the start-up, then the supervisor (hand over again when the
+        #    fundamental strays from the period it holds); a gap restarts it
         found = 0.0
-        if not locked and ip[I_START_UP] == 1:
+        if not valid[k]:
+            if scalars[S_VALID_RUN] > 0.0 and ip[I_START_UP] == 1:
+                blocks[:] = 0.0
+                block_sums[:] = 0.0
+                block_accumulated[:] = 0.0
+                for index in (S_BLOCKS, S_IN_BLOCK, S_CANDIDATE, S_SINCE, S_RECENT_COUNT):
+                    scalars[index] = 0.0
+            scalars[S_VALID_RUN] = 0.0
+        elif ip[I_START_UP] == 1:
+            scalars[S_VALID_RUN] += 1.0
             recent_count = int(scalars[S_RECENT_COUNT])
             recent[recent_count % recent.shape[0]] = y
             scalars[S_RECENT_COUNT] = recent_count + 1
@@ -273,7 +284,13 @@ def _run(Y, offset, dt, fp, ip, scalars, previous_u, norm_high, norm_low, norm_s
                 scalars[S_CANDIDATE] = candidate
                 scalars[S_SINCE] = since
                 if stable:
-                    found = lag * dt * ip[I_DECIMATION]
+                    period = lag * dt * ip[I_DECIMATION]
+                    if not locked or (fp[F_RELOCK] > 0.0 and abs(scalars[S_OMEGA] * period
+                                                                 / (2.0 * math.pi) - 1.0)
+                                      > fp[F_RELOCK]):
+                        found = period
+        else:
+            scalars[S_VALID_RUN] += 1.0
         if found > 0.0:
             # 2a. hand-over: the canonical system starts from the detected period
             omega0 = 2.0 * math.pi / found
@@ -308,7 +325,13 @@ def _run(Y, offset, dt, fp, ip, scalars, previous_u, norm_high, norm_low, norm_s
             scalars[S_LOCKED] = 1.0
             scalars[S_CANONICAL_LOCKED] = 1.0
             scalars[S_RESIDUAL] = 0.0
+            scalars[S_HAND_OVERS] += 1.0
             u[:] = window_u[fit_count - 1]
+            previous_u[:] = u
+        elif not valid[k]:
+            # 2c. a gap: the canonical system runs on at its frequency, learning nothing
+            for i in range(phases.shape[0]):
+                phases[i] += omegas[i] * dt
         else:
             # 2b. anchor and amplitude, normalised input, canonical system over the interval
             scalars[S_STATS_COUNT] = _statistics(y, _fundamental(kind, phases, omegas)[1], dt,
@@ -334,7 +357,7 @@ def _run(Y, offset, dt, fp, ip, scalars, previous_u, norm_high, norm_low, norm_s
                     if not (norm_seen[d, 0] and norm_seen[d, 1]):
                         value = 0.0
                     u[d] = min(max(value, -CLIP), CLIP) + offset
-            if count == 0:
+            if scalars[S_VALID_RUN] == 1.0:           # the first sample, or the first after a gap
                 previous_u[:] = u
             for j in range(1, n_sub + 1):
                 for d in range(n_dofs):
@@ -354,7 +377,7 @@ def _run(Y, offset, dt, fp, ip, scalars, previous_u, norm_high, norm_low, norm_s
                     scalars[S_ZERO_TIME] = 0.0
                     scalars[S_RESETS] += 1.0
                     scalars[S_CANONICAL_LOCKED] = 0.0
-        previous_u[:] = u
+            previous_u[:] = u
         phase, omega_now = _fundamental(kind, phases, omegas)
         # 3. the fundamental: Omega averaged over the last period (since the hand-over)
         omega_now_array[0] = omega_now
@@ -379,7 +402,7 @@ def _run(Y, offset, dt, fp, ip, scalars, previous_u, norm_high, norm_low, norm_s
         if fp[F_UPDATE_SPACING] > 0.0:
             spacing = fp[F_UPDATE_SPACING] * 2.0 * math.pi / n_kernels
             points = max(1, int(math.ceil(omega * dt / spacing - 1e-9)))
-        if deriv_count >= window_length:
+        if scalars[S_VALID_RUN] >= window_length:     # no gap in the window
             table = (window_length - MIN_WINDOW) // 2
             first = deriv_count - window_length
             centre = (first + (window_length - 1) // 2) % max_window
@@ -434,6 +457,7 @@ def _run(Y, offset, dt, fp, ip, scalars, previous_u, norm_high, norm_low, norm_s
         out_y[k] = dmp_y
         out_phase[k] = phase
         out_fundamental[k] = omega / (2.0 * math.pi)
+        out_hand_overs[k] = int(scalars[S_HAND_OVERS])
         for i in range(phases.shape[0]):
             out_oscillators[k, i] = abs(omegas[i]) / (2.0 * math.pi)
         if count % ip[I_EVERY] == 0:
@@ -464,7 +488,7 @@ class FastOnlineLearner:
         n_osc = 1 if self.kind == AFS else 3
         n_coef = p.afs.n_terms + 1 if self.kind == AFS else 3
         layout = DetectorLayout.for_rate(dt, p.detector, p.min_frequency_hz, c.max_frequency_hz)
-        self.fp = np.zeros(28)
+        self.fp = np.zeros(29)
         self.fp[F_FORGET_SAMPLES] = p.forgetting_samples_per_period or 0.0
         self.fp[F_STAT_PERIODS] = p.statistics_periods
         self.fp[[F_K, F_KW, F_NU, F_SCALE]] = (c.coupling, c.frequency_coupling, c.learning_rate,
@@ -489,6 +513,7 @@ class FastOnlineLearner:
             p.detector.confirm, p.detector.threshold, p.update_spacing or 0.0,
             p.detector.stable_periods, p.detector.tolerance)
         self.fp[F_LOCK_SEARCH] = p.lock_search
+        self.fp[F_RELOCK] = p.relock_tolerance or 0.0
         capacity = anchor_capacity(dt, p)
         self.ip = np.zeros(10, dtype=np.int64)
         self.ip[[I_KIND, I_REFERENCE, I_MEAN, I_NSUB, I_MAX_WINDOW]] = (
@@ -496,7 +521,7 @@ class FastOnlineLearner:
             p.max_derivative_window)
         self.ip[[I_START_UP, I_DECIMATION, I_MIN_LAG, I_N_TERMS]] = (
             int(p.start_up), layout.decimation, layout.min_lag, p.afs.n_terms if self.kind == AFS else 3)
-        self.scalars = np.zeros(17)
+        self.scalars = np.zeros(19)
         self.previous_u = np.zeros(n_dofs)
         self.norm_high = np.zeros(n_dofs)
         self.norm_low = np.zeros(n_dofs)
@@ -543,14 +568,22 @@ class FastOnlineLearner:
         """Whether the detected period has been handed to the canonical system."""
         return bool(self.scalars[S_LOCKED])
 
-    def process(self, Y, out_y, out_phase, out_fundamental, out_oscillators, every: int) -> list:
-        """Learn from Y (n, d); fill the per-sample outputs; return the weight snapshots taken."""
+    @property
+    def hand_overs_(self) -> int:
+        """How often it has been (the start-up, then re-locks)."""
+        return int(self.scalars[S_HAND_OVERS])
+
+    def process(self, Y, valid, out_y, out_phase, out_fundamental, out_oscillators,
+                out_hand_overs, every: int) -> list:
+        """Learn from Y (n, d) (rows not ``valid`` are gaps); fill the per-sample outputs;
+        return the weight snapshots taken."""
         self.ip[I_EVERY] = every
         count = int(self.scalars[S_COUNT])
         n_snapshots = (count + Y.shape[0] - 1) // every - (count - 1) // every if count else \
             (Y.shape[0] - 1) // every + 1
         snapshots = np.empty((n_snapshots,) + self.weights_.shape)
-        written = _run(np.ascontiguousarray(Y, dtype=np.float64), self.offset, self.dt, self.fp,
+        written = _run(np.ascontiguousarray(Y, dtype=np.float64),
+                       np.ascontiguousarray(valid, dtype=np.bool_), self.offset, self.dt, self.fp,
                        self.ip, self.scalars, self.previous_u, self.norm_high, self.norm_low,
                        self.norm_seen, self.phases, self.omegas, self.initial_omegas, self.alpha,
                        self.beta, self.stats_reference, self.sums, self.squares,
@@ -560,5 +593,5 @@ class FastOnlineLearner:
                        self.values, self.value_phases, self.value_omegas, self.fit_matrices,
                        self.weights_, self.P, self.dmp_y, self.dmp_s, self.goal_, self.amplitude_,
                        self.moving, self.centres, out_y, out_phase, out_fundamental,
-                       out_oscillators, snapshots)
+                       out_oscillators, out_hand_overs, snapshots)
         return list(snapshots[:written])

@@ -147,6 +147,10 @@ class AdaptiveOscillatorPool:
             self._substep(u, h)
         self._logic_step(dt)
 
+    def free_run(self, dt: float) -> None:
+        """Advance dt without input (a gap): every phase at its own omega, nothing learned."""
+        self.phases_ = self.phases_ + dt * self.omegas_
+
     @property
     def frequencies_hz(self) -> np.ndarray:
         """|omega_i| / 2 pi of the M oscillators (Hz), shape (M,) (the paper's Fig. 4)."""

@@ -54,7 +54,7 @@ class AFSParameters:
     min_frequency_hz: float = 0.05     # Omega is kept in [min, max] (Hz)
     max_frequency_hz: float = 10.0
     locked_coupling: float = 0.5       # c_L: once locked, K, K_Omega x (c_L + kappa E), E = mean e^2
-    residual_gain: float = 100.0       # kappa
+    residual_gain: float = 30.0        # kappa
     residual_periods: float = 1.0      # E is low-passed over this many periods
 
     @classmethod
@@ -145,6 +145,10 @@ class AdaptiveFourierSeries:
         h = dt / n_sub
         for u in interpolated_inputs(previous, current, n_sub):
             self._substep(u, h)
+
+    def free_run(self, dt: float) -> None:
+        """Advance dt without input (a gap): phi at Omega, nothing learned."""
+        self.phase_ += dt * self.omega_
 
     @property
     def frequencies_hz(self) -> np.ndarray:

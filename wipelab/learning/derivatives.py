@@ -126,25 +126,30 @@ class CentredDerivatives:
         self.degree = degree
         self.max_window = max_window
         self.count_ = 0
+        self.valid_run_ = 0
         self.values_ = np.zeros((max_window, n_dofs))
         self.phases_ = np.zeros(max_window)
         self.omegas_ = np.zeros(max_window)
 
-    def push(self, y: np.ndarray, phase: float, omega: float) -> None:
-        """Store sample y (d,) with the canonical phase (rad) and Omega (rad/s) at its time."""
+    def push(self, y: np.ndarray, phase: float, omega: float, valid: bool = True) -> None:
+        """Store sample y (d,) with the canonical phase (rad) and Omega (rad/s) at its time.
+
+        An invalid sample (a gap in the input, y bridged) keeps every window that holds it
+        from giving estimates."""
         slot = self.count_ % self.max_window
         self.values_[slot], self.phases_[slot], self.omegas_[slot] = y, phase, omega
         self.count_ += 1
+        self.valid_run_ = self.valid_run_ + 1 if valid else 0
 
     def centre(self, omega: float):
-        """Estimates at the centre of the current window, or None while too few samples.
+        """Estimates at the centre of the current window, or None while too few valid samples.
 
         Returns
         -------
         (y, yd, ydd, phase, omega) : ndarray (d,) x 3 in m, m/s, m/s^2; float rad; float rad/s
         """
         window = window_for(omega, self.dt, self.window_periods, self.max_window)
-        if self.count_ < window:
+        if self.valid_run_ < window:
             return None
         slots = (self.count_ - window + np.arange(window)) % self.max_window
         estimates = savgol_centre_coefficients(window, self.degree) @ self.values_[slots]
@@ -154,7 +159,7 @@ class CentredDerivatives:
 
     def between(self, omega: float, points: int):
         """Estimates at ``points`` positions x_s = (s + 1/2) / points - 1/2 samples around the
-        centre of the current window (x = 0 for one point), or None while too few samples.
+        centre of the current window (x = 0 for one point), or None while too few valid samples.
 
         The phase at x is the centre sample's phase plus x Omega_c dt.
 
@@ -164,7 +169,7 @@ class CentredDerivatives:
         (points,) in rad; float, Omega at the centre sample in rad/s
         """
         window = window_for(omega, self.dt, self.window_periods, self.max_window)
-        if self.count_ < window:
+        if self.valid_run_ < window:
             return None
         slots = (self.count_ - window + np.arange(window)) % self.max_window
         coefficients = polynomial_fit_matrix(window, self.degree) @ self.values_[slots]

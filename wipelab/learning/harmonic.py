@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba.extending import register_jitable
 from scipy.optimize import minimize_scalar
+from scipy.signal import lombscargle
 
 #: Most harmonics a fit uses (fewer when they would pass Nyquist).
 MAX_HARMONICS = 8
@@ -94,13 +95,19 @@ def harmonic_fit(t: np.ndarray, Y: np.ndarray, frequency_hz: float,
     return HarmonicFit(float(frequency_hz), coefficients, min(max(explained, 0.0), 1.0))
 
 
-def estimate_fundamental_hz(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz: float) -> float:
+def estimate_fundamental_hz(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz: float,
+                            valid: np.ndarray | None = None) -> float:
     """Coarse fundamental from the pooled spectrum by harmonic summation.
 
     Score(f) = P(f) + P(2f) / 2 + P(3f) / 3 over a zero-padded, Hann-windowed periodogram:
-    weighting the harmonics keeps the score of f above those of f/2 and 2f.
+    weighting the harmonics keeps the score of f above those of f/2 and 2f. With gaps
+    (``valid`` false somewhere), the Lomb-Scargle periodogram of the observed samples on the
+    same grid instead: bridged by straight lines, a 1.5 s gap in 8 s of wiping put the
+    periodogram's peak at a half or a quarter of the frequency.
     """
     dt = float(np.median(np.diff(t)))
+    if valid is not None and not np.all(valid):
+        return _lomb_scargle_fundamental_hz(t[valid], Y[valid], min_hz, max_hz, dt)
     centred = (Y - Y.mean(axis=0)) * np.hanning(t.size)[:, None]
     n_fft = int(2 ** math.ceil(math.log2(8 * t.size)))
     power = (np.abs(np.fft.rfft(centred, n=n_fft, axis=0)) ** 2).sum(axis=1)
@@ -113,6 +120,22 @@ def estimate_fundamental_hz(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz:
     for k in (1, 2, 3):
         inside = k * candidates <= nyquist
         score[inside] += np.interp(k * candidates[inside], frequencies, power) / k
+    return float(candidates[int(np.argmax(score))])
+
+
+def _lomb_scargle_fundamental_hz(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz: float,
+                                 dt: float) -> float:
+    """:func:`estimate_fundamental_hz` for unevenly sampled data (the Lomb-Scargle periodogram)."""
+    step = 1.0 / (8.0 * float(t[-1] - t[0]))
+    candidates = np.arange(min_hz, max_hz + 0.5 * step, step)
+    if candidates.size == 0:
+        raise ValueError(f"no frequency between {min_hz} and {max_hz} Hz is resolvable")
+    centred = Y - Y.mean(axis=0)
+    score = np.zeros(candidates.size)
+    for k in (1, 2, 3):
+        inside = k * candidates < 0.5 / dt
+        angular = 2.0 * np.pi * k * candidates[inside]
+        score[inside] += sum(lombscargle(t, column, angular) for column in centred.T) / k
     return float(candidates[int(np.argmax(score))])
 
 
@@ -130,25 +153,41 @@ def _stride(n_samples: int, max_samples: int) -> int:
     return max(1, -(-n_samples // max_samples))
 
 
+#: Fewest periods of a sub-multiple f/2, f/3 a recording must hold for it to be tried.
+SUBMULTIPLE_MIN_PERIODS = 3.0
+
+
 def fundamental_frequency_hz(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz: float,
-                             max_search_samples: int = 4000) -> HarmonicFit:
+                             max_search_samples: int = 4000,
+                             valid: np.ndarray | None = None) -> HarmonicFit:
     """Fundamental of the whole recording, refined by least squares; returns the fit there.
 
     The search runs on at most ``max_search_samples`` evenly strided samples (the frequency's
     precision comes from the duration, not the rate); the returned fit uses every sample.
     After refining the spectral estimate f, the sub-multiples f/2 and f/3 are tried: if one
     explains clearly more of the variance (> 2 % more), the DOFs share a longer period (e.g. a
-    figure eight, where one DOF moves at twice the frequency of the other).
+    figure eight, where one DOF moves at twice the frequency of the other). Only
+    sub-multiples the recording holds at least :data:`SUBMULTIPLE_MIN_PERIODS` periods of are
+    tried: over a period and a half, the extra harmonics of f/3 fit a person's drift and
+    wander well enough to pass (8 s of line strokes at 0.6 Hz came out at 0.199 Hz).
+
+    With ``valid`` (bool, shape (n,): the samples observed), the spectral estimate uses the
+    whole uniform recording, gaps bridged, and every least-squares fit the observed samples
+    only: fitted as data, a 1.5 s straight-line bridge made f/2 or f/3 explain more.
     """
     stride = _stride(t.size, max_search_samples)
     ts, Ys = t[::stride], Y[::stride]
     n_harmonics = harmonic_count(max_hz, float(np.median(np.diff(ts))))
     resolution = 1.0 / float(t[-1] - t[0])
-    coarse = estimate_fundamental_hz(ts, Ys, min_hz, max_hz)
+    observed = np.ones(t.size, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
+    coarse = estimate_fundamental_hz(ts, Ys, min_hz, max_hz, observed[::stride])
+    ts, Ys = ts[observed[::stride]], Ys[observed[::stride]]
+    t, Y = t[observed], Y[observed]
     best_hz = refine_frequency_hz(ts, Ys, coarse, resolution, n_harmonics)
     best = harmonic_fit(ts, Ys, best_hz, n_harmonics).explained
     for divisor in (2, 3):
-        if best_hz / divisor < min_hz:
+        if best_hz / divisor < min_hz or \
+                best_hz / divisor * float(t[-1] - t[0]) < SUBMULTIPLE_MIN_PERIODS:
             continue
         candidate_hz = refine_frequency_hz(ts, Ys, best_hz / divisor, resolution / divisor,
                                            n_harmonics)
@@ -182,7 +221,7 @@ class PeriodicityEstimate:
 
 def periodicity(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz: float,
                 window_periods: float = 2.0, window_samples: int = 90,
-                n_harmonics: int = 3) -> PeriodicityEstimate:
+                n_harmonics: int = 3, valid: np.ndarray | None = None) -> PeriodicityEstimate:
     """Estimate whether a recording is periodic, window by window (tolerates frequency changes).
 
     Parameters
@@ -197,13 +236,17 @@ def periodicity(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz: float,
         A window spans at least this many fundamental periods and samples; windows overlap by half.
     n_harmonics : int
         Harmonics per window fit (few, so that noise explains little by chance).
+    valid : ndarray of bool, shape (n,), optional
+        Samples that were observed: the windows fit those only (a gap's bridge would score as
+        a movement that is not periodic); a window less than half observed is skipped.
     """
     duration = float(t[-1] - t[0])
     min_hz = min(max(min_hz, 1.5 / duration), max_hz)
-    whole = fundamental_frequency_hz(t, Y, min_hz, max_hz)
+    whole = fundamental_frequency_hz(t, Y, min_hz, max_hz, valid=valid)
     f = whole.frequency_hz
     stride = _stride(t.size, int(window_samples * duration * f / window_periods))
-    t, Y = t[::stride], Y[::stride]
+    valid = np.ones(t.size, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
+    t, Y, valid = t[::stride], Y[::stride], valid[::stride]
     dt = float(np.median(np.diff(t)))
     window = min(float(t[-1] - t[0]), max(window_periods / f, window_samples * dt))
     n_harmonics = min(n_harmonics, harmonic_count(f * 1.6, dt))
@@ -211,12 +254,16 @@ def periodicity(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz: float,
     scores = []
     for start in np.arange(t[0], t[-1] - window + 1e-9, window / 2.0):
         inside = (t >= start) & (t <= start + window)
+        if 2 * np.count_nonzero(inside & valid) < np.count_nonzero(inside):
+            continue
+        inside &= valid
         tw, Yw = t[inside] - start, Y[inside]
         explained = [harmonic_fit(tw, Yw, g, n_harmonics).explained for g in grid]
         best = grid[int(np.argmax(explained))]
         refined = refine_frequency_hz(tw, Yw, best, f * 0.025, n_harmonics)
         scores.append(harmonic_fit(tw, Yw, refined, n_harmonics).explained)
-    return PeriodicityEstimate(score=float(np.percentile(scores, 75)), frequency_hz=f,
+    return PeriodicityEstimate(score=float(np.percentile(scores, 75)) if scores else 0.0,
+                               frequency_hz=f,
                                periods=duration * f)
 
 

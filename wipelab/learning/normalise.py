@@ -149,6 +149,10 @@ class RecentSamples:
         self.values_[self.count_ % self.values_.shape[0]] = y
         self.count_ += 1
 
+    def restart(self) -> None:
+        """Forget every sample."""
+        self.count_ = 0
+
     def last(self, n: int) -> np.ndarray:
         """The last n samples (n <= capacity and <= count_), shape (n, d), oldest first."""
         return self.values_[(self.count_ - n + np.arange(n)) % self.values_.shape[0]]

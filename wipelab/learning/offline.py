@@ -42,7 +42,8 @@ class OfflineParameters:
 
 def learn_offline(t: np.ndarray, Y: np.ndarray, params: OfflineParameters = OfflineParameters(),
                   dofs=None, reference_dof: int = 0,
-                  source: dict | None = None) -> tuple[PeriodicModel, LearnHistory]:
+                  source: dict | None = None,
+                  valid: np.ndarray | None = None) -> tuple[PeriodicModel, LearnHistory]:
     """Learn a periodic model from a whole recording at once.
 
     Parameters
@@ -56,6 +57,9 @@ def learn_offline(t: np.ndarray, Y: np.ndarray, params: OfflineParameters = Offl
     reference_dof : int
         The DOF whose fundamental defines phase 0.
     source : dict, optional
+    valid : ndarray of bool, shape (n,), optional
+        Which samples were observed (default: all): the frequency, anchor, amplitude and
+        weights are fitted to those only (see :func:`fundamental_frequency_hz`).
 
     Returns
     -------
@@ -64,8 +68,10 @@ def learn_offline(t: np.ndarray, Y: np.ndarray, params: OfflineParameters = Offl
     t = np.asarray(t, dtype=np.float64)
     Y = np.asarray(Y, dtype=np.float64)
     n, d = Y.shape
+    valid = np.ones(n, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
     dofs = tuple(dofs) if dofs is not None else tuple(f"q{j}" for j in range(d))
-    fit = fundamental_frequency_hz(t, Y, params.min_frequency_hz, params.max_frequency_hz)
+    fit = fundamental_frequency_hz(t, Y, params.min_frequency_hz, params.max_frequency_hz,
+                                   valid=valid)
     omega = 2.0 * math.pi * fit.frequency_hz
     a1, b1 = fit.coefficients[1, reference_dof], fit.coefficients[2, reference_dof]
     phase_offset = float(np.mod(-math.atan2(b1, a1), 2.0 * math.pi))
@@ -73,7 +79,7 @@ def learn_offline(t: np.ndarray, Y: np.ndarray, params: OfflineParameters = Offl
     goal = fit.offset
     amplitude = np.where(fit.amplitude > 0.0, fit.amplitude, 1.0)
     width = params.kernel_width
-    weights = fit_weights(phase, Y, goal, amplitude, params.kernels, width, params.alpha_s,
+    weights = fit_weights(phase[valid], Y[valid], goal, amplitude, params.kernels, width, params.alpha_s,
                           params.beta_s)
     model = PeriodicModel(frequency_hz=fit.frequency_hz, dofs=dofs, kernels=params.kernels,
                           width=width, alpha_s=params.alpha_s, beta_s=params.beta_s, goal=goal,
@@ -82,5 +88,6 @@ def learn_offline(t: np.ndarray, Y: np.ndarray, params: OfflineParameters = Offl
     history = LearnHistory(t=t, input=Y, output=model.waveform(phase), phase=phase,
                            fundamental_hz=np.full(n, fit.frequency_hz),
                            oscillators_hz=np.full((n, 1), fit.frequency_hz),
-                           weights_t=t[-1:], weights=weights[None])
+                           weights_t=t[-1:], weights=weights[None], valid=valid,
+                           hand_overs=np.zeros(n, dtype=np.int64))
     return model, history

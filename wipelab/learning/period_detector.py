@@ -30,6 +30,12 @@ for the parabola): the update costs O(max lag) per block. Measured on the benchm
 150 start-ups (30 noise seeds x 5 cases) the shorter data then let the locked AFS stray by up
 to 6.9 % (more than 1 % in over 5 % of them), against at most 0.45 % with ``confirm`` = 1.
 
+After the hand-over the detector keeps running as the learner's supervisor: whenever its
+estimate holds and disagrees with the canonical system's fundamental by more than the
+learner's ``relock_tolerance``, the learner hands over again (see
+:mod:`wipelab.learning.online`). A gap in the input (samples marked invalid) restarts it:
+the lags compare samples a fixed time apart, which a gap would break.
+
 The per-block functions are plain loops: the numba kernel of the online learner compiles
 these very functions.
 """
@@ -213,7 +219,7 @@ class PeriodDetector:
     Attributes
     ----------
     period_s_ : float or None
-        The detected period (s), once found.
+        The latest estimate that held (s); None until one has, and again after a restart.
     """
 
     def __init__(self, n_dofs: int, dt: float, params: PeriodDetectorParameters,
@@ -221,20 +227,26 @@ class PeriodDetector:
         self.params = params
         self.layout = DetectorLayout.for_rate(dt, params, min_frequency_hz, max_frequency_hz)
         self.block_s = dt * self.layout.decimation
+        self.pairs = compared_pairs(self.layout.max_lag, params.confirm)
         self.blocks_ = np.zeros((self.layout.capacity, n_dofs))
         self.sums_ = np.zeros(self.layout.max_lag + 1)
-        self.pairs = compared_pairs(self.layout.max_lag, params.confirm)
-        self.n_blocks_ = 0
         self._accumulated = np.zeros(n_dofs)
+        self.restart()
+
+    def restart(self) -> None:
+        """Forget every sample (after a gap in the input)."""
+        self.blocks_[:] = 0.0
+        self.sums_[:] = 0.0
+        self._accumulated[:] = 0.0
+        self.n_blocks_ = 0
         self._in_block = 0
         self._candidate = 0.0
         self._since = 0
         self.period_s_: float | None = None
 
     def update(self, y: np.ndarray) -> bool:
-        """Absorb a sample y (d,) in m; True at the one sample where the period is found."""
-        if self.period_s_ is not None:
-            return False
+        """Absorb a sample y (d,) in m; True when it completes a block whose estimate has held
+        (``period_s_`` is then that estimate)."""
         self._accumulated += y
         self._in_block += 1
         if self._in_block < self.layout.decimation:

@@ -10,8 +10,11 @@ amplitude and anchor.
 Logged topics (MCAP topic = Rerun entity), time = the input's time in seconds:
 
     /input/trajectory             the demonstration, one series per DOF (m)
+    /input/valid                  1 where the input was observed, 0 in a gap (learned nothing)
     /oscillators/frequency_hz     every oscillator's frequency (AFO pool: omega_1..3, Fig. 4)
     /oscillators/fundamental_hz   the selected fundamental Omega / 2 pi
+    /learner/hand_overs           detected periods handed to the canonical system so far
+                                  (1 after the start-up; more when the supervisor re-locks)
     /dmp/<dof>/waveform           input vs learned movement of one DOF (m, Fig. 5)
     /dmp/<dof>/weights            the weights w_00.. as they converge
     /model                        model.json at the end of the input (schema wipelab.Model)
@@ -115,8 +118,8 @@ def _track_mcap(path: Path, params: LearnParams) -> Trajectory:
     return Trajectory(path=str(path), t=t, columns={n: values[:, j] for j, n in enumerate(names)})
 
 
-def _demonstration(path: Path, params: LearnParams) -> tuple[np.ndarray, np.ndarray]:
-    """The chosen DOFs on a uniform time grid; InputError for unusable input."""
+def _demonstration(path: Path, params: LearnParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The chosen DOFs on a uniform time grid (t, Y, valid); InputError for unusable input."""
     trajectory = _track_mcap(path, params) if path.suffix == ".mcap" else \
         read_trajectory(path, required=("t", *params.dofs))
     if trajectory.t[0] < 0.0:
@@ -128,8 +131,9 @@ def _demonstration(path: Path, params: LearnParams) -> tuple[np.ndarray, np.ndar
     return to_uniform(trajectory.t, trajectory.array(params.dofs), trajectory.valid)
 
 
-def _check_periodic(path: Path, t: np.ndarray, Y: np.ndarray, params: LearnParams):
-    estimate = periodicity(t, Y, params.min_frequency_hz, params.max_frequency_hz)
+def _check_periodic(path: Path, t: np.ndarray, Y: np.ndarray, valid: np.ndarray,
+                    params: LearnParams):
+    estimate = periodicity(t, Y, params.min_frequency_hz, params.max_frequency_hz, valid=valid)
     if estimate.periods < params.min_periods:
         raise InputError(f"{path}: too short, {estimate.periods:.1f} periods of "
                          f"{estimate.frequency_hz:.3g} Hz, need at least {params.min_periods:g}")
@@ -161,11 +165,11 @@ def learn(trajectory: str | os.PathLike, out_dir: str | os.PathLike,
     ------
     InputError
         Missing/unreadable file, missing columns, NaN/inf, too short, time not increasing,
-        movement not periodic.
+        movement not periodic, or (online) never two periods without a gap.
     """
     path = Path(trajectory)
-    t, Y = _demonstration(path, params)
-    estimate = _check_periodic(path, t, Y, params)
+    t, Y, valid = _demonstration(path, params)
+    estimate = _check_periodic(path, t, Y, valid, params)
     # Phase 0 is where the DOF with the strongest fundamental peaks.
     reference = int(np.argmax(harmonic_fit(t, Y, estimate.frequency_hz).fundamental))
     parameters = asdict(params) | {"dofs": list(params.dofs)}
@@ -178,12 +182,16 @@ def learn(trajectory: str | os.PathLike, out_dir: str | os.PathLike,
         with tqdm(total=t.size, desc="learn", unit="sample", disable=quiet, file=sys.stderr,
                   leave=False) as bar:
             model, history = learn_online(t, Y, online, params.dofs, reference, source,
-                                          progress=bar.update)
+                                          progress=bar.update, valid=valid)
+        if history.hand_overs[-1] == 0:
+            raise InputError(f"{path}: online learning never locked onto a period (its detector "
+                             f"needs two periods without a gap); --mode offline fits the whole "
+                             f"recording")
     else:
         offline = OfflineParameters(kernels=params.kernels, width=params.width,
                                     min_frequency_hz=params.min_frequency_hz,
                                     max_frequency_hz=params.max_frequency_hz)
-        model, history = learn_offline(t, Y, offline, params.dofs, reference, source)
+        model, history = learn_offline(t, Y, offline, params.dofs, reference, source, valid)
     inputs = {"trajectory": path}
     with staged_output(out_dir) as tmp:
         write_json(tmp / "model.json", model.to_dict())
@@ -197,10 +205,13 @@ def _log(rec: StageRecorder, model: PeriodicModel, history: LearnHistory) -> Non
     """Everything the learner went through (see the module docstring for the topics)."""
     t = history.t
     rec.scalars("/input/trajectory", t, history.input, names=model.dofs)
+    rec.scalars("/input/valid", t, history.valid.astype(np.float64), names=["valid"])
     names = ["omega"] if history.oscillators_hz.shape[1] == 1 else \
         [f"omega_{i + 1}" for i in range(history.oscillators_hz.shape[1])]
     rec.scalars("/oscillators/frequency_hz", t, history.oscillators_hz, names=names)
     rec.scalars("/oscillators/fundamental_hz", t, history.fundamental_hz, names=["fundamental"])
+    rec.scalars("/learner/hand_overs", t, history.hand_overs.astype(np.float64),
+                names=["hand_overs"])
     weight_names = [f"w_{i:02d}" for i in range(model.kernels)]
     for j, dof in enumerate(model.dofs):
         rec.scalars(f"/dmp/{dof}/waveform", t,
