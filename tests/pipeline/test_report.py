@@ -1,5 +1,6 @@
 """``wipelab report``: the paper's figures and a summary from a run's real files."""
 
+import numpy as np
 import json
 
 import matplotlib.image
@@ -38,3 +39,17 @@ def test_report_of_a_directory_without_finished_stages(tmp_path):
     with pytest.raises(InputError, match="no finished stage"):
         write_report(tmp_path)
     assert not (tmp_path / "report").exists()
+
+
+def test_learn_figures_shade_the_gaps_and_draw_no_bridge_over_them():
+    from wipelab.pipeline.figures import frequency_figure, waveform_figure
+
+    t = np.arange(0, 10, 1 / 30)
+    observed = ~((t >= 4.0) & (t < 5.5))
+    demonstrated = np.column_stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)])
+    figure = waveform_figure(t, demonstrated, 0.9 * demonstrated, ["x", "y"], 1.0, observed)
+    drawn = figure.axes[0].lines[0].get_ydata()
+    assert np.isnan(drawn[~observed]).all() and not np.isnan(drawn[observed]).any()
+    assert len(figure.axes[0].patches) == 1
+    figure = frequency_figure(t, np.ones((t.size, 1)), ["omega"], observed=observed)
+    assert "not observed" in [text.get_text() for text in figure.axes[0].get_legend().get_texts()]

@@ -31,7 +31,8 @@ def _common(function):
                      help="Sponge stiffness (N/m, 500-2000)."),
         click.option("--seed", type=int, default=0, show_default=True,
                      help="Seed of the F/T sensor noise and bias."),
-        click.option("-q", "--quiet", is_flag=True, help="No progress bar."),
+        click.option("-q", "--quiet", is_flag=True,
+                     help="No progress bar, no summary (warnings still go to stderr)."),
     ]
     for option in reversed(options):
         function = option(function)
@@ -83,8 +84,9 @@ def adapt(model: Path, out_dir: Path, surface: str | None, force: float | None,
     metrics = run_adapt(model, out_dir, params, quiet=quiet)
     learning, profile = metrics["learning"], metrics["profile_last_learning_period"]
     state = "converged" if learning["converged"] else "not converged"
-    click.echo(f"adapt: {state} after {learning['periods']} periods; learned height RMS "
-               f"error {1000 * profile['rms_height_error_m']:.1f} mm -> {out_dir}")
+    if not quiet:
+        click.echo(f"adapt: {state} after {learning['periods']} periods; learned height RMS "
+                   f"error {1000 * profile['rms_height_error_m']:.1f} mm -> {out_dir}")
     if metrics["safety_stop"]:
         click.echo(f"warning: safety stop: {metrics['safety_stop']}", err=True)
 
@@ -126,6 +128,8 @@ def replay(model: Path, more_scales: tuple[float, ...], out_dir: Path, surface: 
                           center=comma_separated("--center", center, 2), base=comma_separated("--base", base, 3),
                           sponge_stiffness=sponge_stiffness, seed=seed)
     metrics = run_replay(model, out_dir, params, quiet=quiet)
+    if quiet:
+        return
     for scale, runs in metrics["scales"].items():
         summary = ", ".join(f"{mode} {run.get('rms_force_error_n', float('nan')):.2f} N"
                             for mode, run in runs.items())

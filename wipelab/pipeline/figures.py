@@ -28,7 +28,8 @@ def _figure(rows: int, height_per_row: float = 2.4, width: float = 8.0) -> tuple
 
 def frequency_figure(t: np.ndarray, oscillators_hz: np.ndarray, names: Sequence[str],
                      chosen_hz: np.ndarray | None = None,
-                     true_hz: float | None = None) -> Figure:
+                     true_hz: float | None = None,
+                     observed: np.ndarray | None = None) -> Figure:
     """Frequency adaptation (paper Fig. 4): every oscillator's frequency and the chosen Omega.
 
     Parameters
@@ -42,8 +43,11 @@ def frequency_figure(t: np.ndarray, oscillators_hz: np.ndarray, names: Sequence[
         The fundamental frequency picked from them, Hz.
     true_hz : float, optional
         The demonstration's true frequency (synthetic demos), Hz.
+    observed : ndarray of bool, shape (n,), optional
+        Samples the learner saw; the gaps (the sponge lost) are shaded.
     """
     figure, (ax,) = _figure(1, 3.2)
+    _shade_gaps(ax, t, observed)
     for j, name in enumerate(names):
         ax.plot(t, oscillators_hz[:, j], linewidth=1.0, label=name)
     if chosen_hz is not None:
@@ -59,7 +63,8 @@ def frequency_figure(t: np.ndarray, oscillators_hz: np.ndarray, names: Sequence[
 
 
 def waveform_figure(t: np.ndarray, demonstrated: np.ndarray, learned: np.ndarray,
-                    dofs: Sequence[str], period_s: float) -> Figure:
+                    dofs: Sequence[str], period_s: float,
+                    observed: np.ndarray | None = None) -> Figure:
     """Demonstrated input vs learned waveform per DOF (paper Fig. 5), with the last periods
     enlarged on the right.
 
@@ -74,12 +79,17 @@ def waveform_figure(t: np.ndarray, demonstrated: np.ndarray, learned: np.ndarray
     dofs : sequence of str, length d
     period_s : float
         Period of the learned movement, s: the enlargement shows the last three.
+    observed : ndarray of bool, shape (n,), optional
+        Samples the learner saw: the demonstration is drawn there only, the gaps shaded.
     """
+    if observed is not None:
+        demonstrated = np.where(observed[:, None], demonstrated, np.nan)
     figure = Figure(figsize=(10.0, 0.6 + 2.4 * len(dofs)), dpi=110, layout="constrained")
     axes = figure.subplots(len(dofs), 2, sharex="col", squeeze=False,
                            gridspec_kw={"width_ratios": [3, 1]})
     last = t >= t[-1] - 3.0 * period_s
     for j, dof in enumerate(dofs):
+        _shade_gaps(axes[j, 0], t, observed)
         for ax, window in ((axes[j, 0], slice(None)), (axes[j, 1], last)):
             ax.plot(t[window], demonstrated[window, j], color=INPUT_COLOUR, linewidth=1.0,
                     label="demonstrated")
@@ -168,6 +178,16 @@ def force_error_bars_figure(rms_error: dict[str, dict[str, float]], title: str) 
     ax.grid(True, axis="y", linewidth=0.5, alpha=0.5)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small", title="mode")
     return figure
+
+
+def _shade_gaps(ax, t: np.ndarray, observed: np.ndarray | None) -> None:
+    """Shade the stretches of ``t`` where ``observed`` is False, labelled once."""
+    if observed is None or observed.all():
+        return
+    edges = np.diff(np.concatenate([[0], (~observed).astype(int), [0]]))
+    for n, (start, stop) in enumerate(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1))):
+        ax.axvspan(t[start], t[stop - 1], color=REFERENCE_COLOUR, alpha=0.2, linewidth=0,
+                   label="not observed" if n == 0 else None)
 
 
 def _shade_segments(axes: list, segments: Sequence[tuple[float, str]], t_end: float) -> None:

@@ -140,19 +140,29 @@ def _learn_figures(stage_dir: Path, out: Path) -> list[ReportFigure]:
     t, oscillators = _scalars(mcap, "/oscillators/frequency_hz")
     _, fundamental = _scalars(mcap, "/oscillators/fundamental_hz")
     names = list(oscillators)
+    observed = _observed(mcap, t)
     figure = frequency_figure(t, np.column_stack([oscillators[n] for n in names]), names,
-                              fundamental["fundamental"], _demo_frequency_hz(stage_dir.parent))
+                              fundamental["fundamental"], _demo_frequency_hz(stage_dir.parent),
+                              observed)
     files = [f"{stage_dir.name}_frequency.png", f"{stage_dir.name}_waveform.png"]
     _save(figure, out / files[0])
     waveforms = [_scalars(mcap, f"/dmp/{dof}/waveform")[1] for dof in dofs]
     _save(waveform_figure(t, np.column_stack([w["input"] for w in waveforms]),
                           np.column_stack([w["learned"] for w in waveforms]), dofs,
-                          1.0 / model["frequency_hz"]),
+                          1.0 / model["frequency_hz"], observed),
           out / files[1])
     return [ReportFigure(files[0], f"{stage_dir.name}: frequency adaptation of the canonical "
                                    f"system and the chosen fundamental (cf. paper Fig. 4)"),
             ReportFigure(files[1], f"{stage_dir.name}: demonstrated movement (blue) and the "
                                    f"learned waveform (red) per DOF (cf. paper Fig. 5)")]
+
+
+def _observed(mcap: Path, t: np.ndarray) -> np.ndarray:
+    """The samples the learner saw (/input/valid; every one in recordings from before it)."""
+    try:
+        return _scalars(mcap, "/input/valid")[1]["valid"] > 0.5
+    except KeyError:
+        return np.ones(t.size, dtype=bool)
 
 
 def _demo_frequency_hz(run_dir: Path) -> float | None:
