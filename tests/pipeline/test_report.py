@@ -1,9 +1,9 @@
 """``wipelab report``: the paper's figures and a summary from a run's real files."""
 
-import numpy as np
 import json
 
 import matplotlib.image
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
