@@ -131,10 +131,12 @@ def main() -> None:
     args.workdir.mkdir(parents=True, exist_ok=True)
 
     print(f"load average at start: {' '.join(f'{v:.1f}' for v in os.getloadavg())} "
-          f"on {os.cpu_count()} cores (fps is wall clock, decoding included)")
+          f"on {os.cpu_count()} cores (fps is wall clock, decoding included; cpu ms is the "
+          f"CPU time of all threads per frame pair)")
     header = (f"{'demo':<22} | {'ours: rms':>9} {'p95':>6} {'inv%':>5} {'regain':>6} {'fps':>5} "
               f"{'cpu ms':>6} | {'CamShift: rms':>13} {'p95':>6} {'inv%':>5} {'regain':>6} "
-              f"{'fps':>5} | {'learn off%':>10} {'on%':>6} {'truth off%':>10} {'on%':>6}")
+              f"{'fps':>5} {'cpu ms':>6} | {'learn off%':>10} {'on%':>6} {'truth off%':>10} "
+              f"{'on%':>6}")
     print(header)
     print("-" * len(header))
     ours_all, base_all, learn_all = [], [], []
@@ -154,7 +156,7 @@ def main() -> None:
                 print(f"{name:<22} | {ours.rms_mm:7.2f}mm {ours.p95_mm:6.2f} "
                       f"{ours.invalid_visible_pct:5.2f} {ours.regain_s:5.2f}s {ours.fps:5.0f} "
                       f"{ours.cpu_ms:6.2f} | {base.rms_mm:11.2f}mm {base.p95_mm:6.2f} {base.invalid_visible_pct:5.2f} "
-                      f"{base.regain_s:5.2f}s {base.fps:5.0f} "
+                      f"{base.regain_s:5.2f}s {base.fps:5.0f} {base.cpu_ms:6.2f} "
                       f"| {errors[0]:10.3f} {errors[1]:6.2f} {errors[2]:10.3f} {errors[3]:6.2f}",
                       flush=True)
     print("-" * len(header))

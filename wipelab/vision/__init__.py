@@ -15,7 +15,8 @@ Modules (one concept each):
 * :mod:`~wipelab.vision.colour_model` - named colours, HSV ranges, the histogram
   back-projection and the linear colour feature;
 * :mod:`~wipelab.vision.sponge_box`, :mod:`~wipelab.vision.sponge_likelihood` - the sponge
-  as a box and how well a pose explains both images;
+  as a box and how well a pose explains both images (per-sample loops compiled in
+  ``_likelihood_kernel``; the colour blob's moments in ``_moments_kernel``);
 * :mod:`~wipelab.vision.particle_filter`, :mod:`~wipelab.vision.pose_refinement` - the
   filter's building blocks and the Newton refinement;
 * :mod:`~wipelab.vision.tracker` - the tracker (paper Sec. III-A2), occlusion handling;

@@ -54,9 +54,9 @@ class SpongeBox:
 def yaw_rotation(yaw: np.ndarray) -> np.ndarray:
     """Rotations about z, shape (..., 3, 3), for angles ``yaw`` (rad) of shape (...)."""
     c, s = np.cos(yaw), np.sin(yaw)
-    zero, one = np.zeros_like(c), np.ones_like(c)
-    return np.stack([np.stack([c, -s, zero], -1), np.stack([s, c, zero], -1),
-                     np.stack([zero, zero, one], -1)], -2)
+    R = np.zeros(np.shape(yaw) + (3, 3))
+    R[..., 0, 0], R[..., 0, 1], R[..., 1, 0], R[..., 1, 1], R[..., 2, 2] = c, -s, s, c, 1.0
+    return R
 
 
 def visible_faces(face_centres: np.ndarray, face_normals: np.ndarray,

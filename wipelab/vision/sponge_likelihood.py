@@ -16,8 +16,10 @@ image (:mod:`wipelab.vision.undistortion`) and read bilinearly. Per camera:
   is hidden.
 
 The particle filter reads the histogram back-projection (a probability); the refinement
-(:class:`LinearisedContrast`) reads a linear colour feature, whose blurred edges stay
-centred on the true outline. Everything is numpy over (poses x samples) arrays.
+(:class:`SilhouetteContrast`) reads a linear colour feature, whose blurred edges stay
+centred on the true outline. The per-sample loops run compiled
+(:mod:`wipelab.vision._likelihood_kernel`); the ``*_reference`` functions here are their
+numpy references, which tests hold them to.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wipelab.vision._likelihood_kernel import contrast_derivatives, score_poses
 from wipelab.vision.sampling import sample_bilinear
 from wipelab.vision.undistortion import pinhole
 from wipelab.vision.sponge_box import EDGE_FACES, EDGES, FACE_NORMALS, SpongeBox
@@ -204,36 +207,10 @@ def _camera_points(poses: np.ndarray, samples: ViewSamples, image: ViewImage) ->
     return a[:, None, :] + c * samples.MA + s * samples.MB + samples.MC  # (n, k, 3)
 
 
-def project_view_samples(poses: np.ndarray, samples: ViewSamples, image: ViewImage
-                         ) -> np.ndarray:
-    """Pixels of every pose's sample points in the window of ``image``.
-
-    Parameters
-    ----------
-    poses : ndarray, shape (n, 4)
-        (x, y, z, yaw) in the tracking frame (metres, rad).
-
-    Returns
-    -------
-    ndarray, shape (n, k, 2)
-        (u, v) relative to the window's top-left pixel (undistorted image).
-    """
-    return pinhole(_camera_points(poses, samples, image), image.K) - np.asarray(image.origin)
-
-
-def read_scores(uv: np.ndarray, samples: ViewSamples, image: ViewImage
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """Contrast (n,) and coverage (n,) from sample pixels (n, k, 2) of ``image``'s window."""
-    values = sample_bilinear(image.probability, uv).astype(np.float64)
-    contrast = values @ samples.weights
-    faces = values[:, samples.is_face]
-    coverage = faces.mean(axis=1) if faces.shape[1] else np.zeros(len(uv))
-    return contrast, coverage
-
-
 def score_view(poses: np.ndarray, samples: ViewSamples, image: ViewImage
                ) -> tuple[np.ndarray, np.ndarray]:
-    """Contrast and coverage of many poses in one camera.
+    """Contrast and coverage of many poses in one camera (compiled; see
+    :func:`score_view_reference`).
 
     Parameters
     ----------
@@ -247,7 +224,20 @@ def score_view(poses: np.ndarray, samples: ViewSamples, image: ViewImage
     coverage : ndarray, shape (n,)
         Mean probability inside the visible faces, in [0, 1].
     """
-    return read_scores(project_view_samples(poses, samples, image), samples, image)
+    return score_poses(np.ascontiguousarray(poses, dtype=np.float64), samples.MA, samples.MB,
+                       samples.MC, samples.weights, samples.is_face, image.R_cam_track,
+                       image.t_cam_track, image.K, image.origin, image.probability, True)
+
+
+def score_view_reference(poses: np.ndarray, samples: ViewSamples, image: ViewImage
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """Numpy reference of :func:`score_view` (image read through ``cv2.remap``)."""
+    uv = pinhole(_camera_points(poses, samples, image), image.K) - np.asarray(image.origin)
+    values = sample_bilinear(image.probability, uv).astype(np.float64)
+    contrast = values @ samples.weights
+    faces = values[:, samples.is_face]
+    coverage = faces.mean(axis=1) if faces.shape[1] else np.zeros(len(uv))
+    return contrast, coverage
 
 
 #: Offsets (pixels) at which the image is read around each sample for its derivatives.
@@ -255,10 +245,15 @@ _STENCIL = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1], [1, 1], [1, -1], 
                      [-1, -1]], dtype=np.float64)
 
 
-def _pixels_and_jacobian(pose: np.ndarray, samples: ViewSamples, image: ViewImage
-                         ) -> tuple[np.ndarray, np.ndarray]:
-    """Window pixels (k, 2) of the samples of ``pose`` and their Jacobian (k, 2, 4) with
-    respect to (x, y, z, yaw), analytic for the pinhole."""
+def contrast_derivatives_reference(pose: np.ndarray, samples: ViewSamples, image: ViewImage
+                                   ) -> tuple[float, np.ndarray, np.ndarray]:
+    """Numpy reference of the compiled contrast derivatives of one camera: the contrast of
+    ``pose`` (4,), its gradient (4,) and Hessian (4, 4).
+
+    The image is read bilinearly at each sample's pixel and at +-1 pixel around it for its
+    gradient g and Hessian H, chained with the pinhole's analytic Jacobian J (k, 2, 4) of
+    the pixels in the pose: ``grad = sum w J^T g``, ``Hess = sum w J^T H J``.
+    """
     K = image.K
     X = _camera_points(pose[None], samples, image)[0]  # (k, 3)
     inverse_z = 1.0 / X[:, 2]
@@ -268,75 +263,59 @@ def _pixels_and_jacobian(pose: np.ndarray, samples: ViewSamples, image: ViewImag
     d_yaw = -s * samples.MA + c * samples.MB  # (k, 3)
     d_point = np.concatenate([np.broadcast_to(image.R_cam_track, (len(X), 3, 3)),
                               d_yaw[:, :, None]], axis=2)  # (k, 3, 4)
-    # d(u, v)/dX of the pinhole
-    du = (K[0, 0] * d_point[:, 0] + K[0, 1] * d_point[:, 1]) * inverse_z[:, None] \
+    Ju = (K[0, 0] * d_point[:, 0] + K[0, 1] * d_point[:, 1]) * inverse_z[:, None] \
         - ((K[0, 0] * X[:, 0] + K[0, 1] * X[:, 1]) * inverse_z ** 2)[:, None] * d_point[:, 2]
-    dv = K[1, 1] * (d_point[:, 1] * inverse_z[:, None]
+    Jv = K[1, 1] * (d_point[:, 1] * inverse_z[:, None]
                     - (X[:, 1] * inverse_z ** 2)[:, None] * d_point[:, 2])
-    return uv, np.stack([du, dv], axis=1)
+    f = sample_bilinear(image.probability, uv[:, None, :] + _STENCIL).astype(np.float64)
+    w = samples.weights
+    gu, gv = 0.5 * (f[:, 1] - f[:, 2]), 0.5 * (f[:, 3] - f[:, 4])
+    huu, hvv = f[:, 1] - 2 * f[:, 0] + f[:, 2], f[:, 3] - 2 * f[:, 0] + f[:, 4]
+    huv = 0.25 * (f[:, 5] - f[:, 6] - f[:, 7] + f[:, 8])
+    gradient = (w * gu) @ Ju + (w * gv) @ Jv
+    hessian = (Ju.T * (w * huu)) @ Ju + (Jv.T * (w * hvv)) @ Jv \
+        + (Ju.T * (w * huv)) @ Jv + (Jv.T * (w * huv)) @ Ju
+    return float(w @ f[:, 0]), gradient, hessian
 
 
-class LinearisedContrast:
-    """Summed silhouette contrast of both cameras near a pose, for Newton refinement.
+class SilhouetteContrast:
+    """Summed silhouette contrast of both cameras, for Newton refinement (compiled).
 
-    The sample pixels are linearised in the pose, ``uv(p) = uv(p0) + J (p - p0)``; over the
-    few millimetres and hundredths of a radian of a refinement the error of that is far
-    below a hundredth of a pixel, and it is re-linearised when the pose wanders further.
-    The image is read bilinearly at the pixels and at +-1 pixel around them for its gradient
-    g and Hessian H, so that ``grad = sum w J^T g`` and ``Hess = sum w J^T H J``.
+    The image is read bilinearly at the sample pixels and at +-1 pixel around them for its
+    gradient and Hessian, chained with the projection's Jacobian (see
+    :func:`contrast_derivatives_reference`).
 
     Parameters
     ----------
-    pose : ndarray, shape (4,)
-        (x, y, z, yaw) to linearise at.
     views : list of (ViewSamples, ViewImage)
         Best on a linear colour feature (see
         :class:`wipelab.vision.colour_model.LinearColourFeature`): its blurred edges stay
         centred on the true outline.
-    reach : ndarray, shape (4,)
-        Re-linearise when a pose differs from the linearisation point by more than this.
     """
 
-    def __init__(self, pose: np.ndarray, views: list[tuple[ViewSamples, ViewImage]],
-                 reach: np.ndarray = np.array([0.004, 0.004, 0.004, 0.05])):
+    def __init__(self, views: list[tuple[ViewSamples, ViewImage]]):
         self.views = views
-        self.reach = reach
-        self._linearise(np.asarray(pose, dtype=np.float64))
-
-    def _linearise(self, pose: np.ndarray) -> None:
-        self.pose = pose.copy()
-        self.linear = [_pixels_and_jacobian(pose, samples, image) for samples, image in self.views]
-
-    def _near(self, pose: np.ndarray) -> np.ndarray:
-        delta = pose - self.pose
-        if np.any(np.abs(delta) > self.reach):
-            self._linearise(pose)
-            delta = np.zeros(4)
-        return delta
 
     def __call__(self, poses: np.ndarray) -> np.ndarray:
-        """Summed contrast of poses (n, 4) near the linearisation point, shape (n,)."""
-        delta = poses - self.pose
+        """Summed contrast of poses (n, 4), shape (n,)."""
+        poses = np.ascontiguousarray(poses, dtype=np.float64)
         total = np.zeros(len(poses))
-        for (samples, image), (uv, J) in zip(self.views, self.linear):
-            pixels = uv + np.tensordot(delta, J, axes=(1, 2))  # (n, k, 2)
-            total += sample_bilinear(image.probability, pixels).astype(np.float64) @ samples.weights
+        for samples, image in self.views:
+            total += score_poses(poses, samples.MA, samples.MB, samples.MC, samples.weights,
+                                 samples.is_face, image.R_cam_track, image.t_cam_track,
+                                 image.K, image.origin, image.probability, False)[0]
         return total
 
     def derivatives(self, pose: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
         """Summed contrast at ``pose`` with its gradient (4,) and Hessian (4, 4)."""
-        delta = self._near(pose)
+        pose = np.ascontiguousarray(pose, dtype=np.float64)
         value, gradient, hessian = 0.0, np.zeros(4), np.zeros((4, 4))
-        for (samples, image), (uv, J) in zip(self.views, self.linear):
-            pixels = uv + J @ delta
-            f = sample_bilinear(image.probability, pixels[:, None, :] + _STENCIL).astype(np.float64)
-            w = samples.weights
-            gu, gv = 0.5 * (f[:, 1] - f[:, 2]), 0.5 * (f[:, 3] - f[:, 4])
-            huu, hvv = f[:, 1] - 2 * f[:, 0] + f[:, 2], f[:, 3] - 2 * f[:, 0] + f[:, 4]
-            huv = 0.25 * (f[:, 5] - f[:, 6] - f[:, 7] + f[:, 8])
-            Ju, Jv = J[:, 0], J[:, 1]  # (k, 4)
-            value += w @ f[:, 0]
-            gradient += (w * gu) @ Ju + (w * gv) @ Jv
-            hessian += (Ju.T * (w * huu)) @ Ju + (Jv.T * (w * hvv)) @ Jv \
-                + (Ju.T * (w * huv)) @ Jv + (Jv.T * (w * huv)) @ Ju
-        return float(value), gradient, hessian
+        for samples, image in self.views:
+            v, g, h = contrast_derivatives(pose, samples.MA, samples.MB, samples.MC,
+                                           samples.weights, image.R_cam_track,
+                                           image.t_cam_track, image.K, image.origin,
+                                           image.probability)
+            value += v
+            gradient += g
+            hessian += h
+        return value, gradient, hessian

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from wipelab.vision._moments_kernel import threshold_moments
 from wipelab.vision.calibration import StereoCalibration
 from wipelab.vision.colour_model import (ColourModel, ColourSource, LinearColourFeature,
                                          largest_blob)
@@ -41,7 +42,7 @@ from wipelab.vision.particle_filter import (align_yaw, normalised_weights,
 from wipelab.vision.pose_refinement import refine_pose
 from wipelab.vision.projection import invert_transform, transform_points
 from wipelab.vision.sponge_box import SpongeBox, yaw_rotation
-from wipelab.vision.sponge_likelihood import (LinearisedContrast, SpongeTemplate, ViewImage,
+from wipelab.vision.sponge_likelihood import (SilhouetteContrast, SpongeTemplate, ViewImage,
                                               ViewSamples, facing_camera, score_view,
                                               view_samples)
 from wipelab.vision.stereo_geometry import (closest_point_of_rays, reprojection_errors,
@@ -160,7 +161,8 @@ class _View:
                  size: tuple[int, int]):
         self.undistorter = Undistorter(K, D, size)
         self.K = self.undistorter.K  # of the undistorted canvas
-        self.R, self.t = T_cam_track[:3, :3], T_cam_track[:3, 3]
+        self.R = np.ascontiguousarray(T_cam_track[:3, :3])
+        self.t = np.ascontiguousarray(T_cam_track[:3, 3])
         self.T_cam_track = T_cam_track
         self.eye = invert_transform(T_cam_track)[:3, 3]
 
@@ -397,10 +399,10 @@ class SpongeTracker:
         or None when a window shows too few of them."""
         rays = []
         for window, view in zip(windows, self.views):
-            m = cv2.moments(_mask(window.probability.probability), binaryImage=True)
-            if m["m00"] < self.params.min_blob_area:
+            m00, m10, m01 = threshold_moments(window.probability.probability, 0.5)
+            if m00 < self.params.min_blob_area:
                 return None
-            centre = np.array([m["m10"], m["m01"]]) / m["m00"] + window.probability.origin
+            centre = np.array([m10, m01]) / m00 + window.probability.origin
             rays.append((view.eye, view.R.T @ np.linalg.solve(view.K, np.append(centre, 1.0))))
         return closest_point_of_rays(*rays[0], *rays[1])
 
@@ -470,7 +472,7 @@ class SpongeTracker:
     def _refine(self, estimate: np.ndarray, windows: list[_Window]) -> np.ndarray:
         """Newton refinement of a pose on the linear colour feature of both cameras."""
         p = self.params
-        contrast = LinearisedContrast(estimate, list(zip(
+        contrast = SilhouetteContrast(list(zip(
             self._samples(self.fine, estimate, p.refine_offsets),
             [window.feature for window in windows])))
         pose, _ = refine_pose(contrast.derivatives, contrast, estimate,
