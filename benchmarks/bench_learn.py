@@ -44,6 +44,7 @@ SYSTEMS = {f"{name}, {variant}": replace(params, start_up=start_up)
            for start_up, variant in ((True, "start-up detector"), (False, "oscillators alone"))
            for name, params in _GAINS.items()}
 DEFAULTS = list(SYSTEMS)[:2]
+SCHEDULED = OnlineParameters(afs=AFSParameters(locked_coupling=0.5, residual_gain=100.0))
 
 
 def table(title: str, header: list[str], rows: list[list]) -> None:
@@ -89,8 +90,8 @@ def frequency_tables() -> None:
 
     rows = []
     step_systems = {name: SYSTEMS[name] for name in DEFAULTS}
-    step_systems["AFS without the gain schedule after the lock (c_L = 1, kappa = 0)"] = \
-        OnlineParameters(afs=AFSParameters(locked_coupling=1.0, residual_gain=0.0))
+    step_systems["AFS with the gain schedule after the lock (c_L = 0.5, kappa = 100)"] = \
+        SCHEDULED
     for name, params in step_systems.items():
         cells = []
         for rate_hz in RATES_HZ:
@@ -128,16 +129,18 @@ def human_tempo_table() -> None:
     t = np.arange(0, 60, 1 / 30)
     gaps = ((t >= 17.0) & (t < 18.5)) | ((t >= 44.0) & (t < 45.5))
     variants = {
-        "online (default): supervisor, kappa = 30, mean phase rate over 40 periods, gaps skipped":
-            (OnlineParameters(), True),
+        "AFS (default): supervisor, no gain schedule, mean phase rate over 40 periods, "
+        "gaps skipped": (OnlineParameters(), True),
         "the same, gaps bridged and fed as data": (OnlineParameters(), False),
-        "the same, kappa = 100": (OnlineParameters(afs=AFSParameters(residual_gain=100.0)), True),
+        "the same, model frequency = fundamental of the last period":
+            (OnlineParameters(frequency_periods=1.0), True),
         "the same, no supervisor": (OnlineParameters(relock_tolerance=None), True),
-        "the same, no supervisor, kappa = 100": (
-            OnlineParameters(relock_tolerance=None, afs=AFSParameters(residual_gain=100.0)), True),
-        "no supervisor, kappa = 100, fundamental of the last period (the learner before)": (
-            OnlineParameters(relock_tolerance=None, frequency_periods=1.0,
-                             afs=AFSParameters(residual_gain=100.0)), True),
+        "the same, gain schedule (c_L = 0.5, kappa = 30)": (replace(SCHEDULED, afs=replace(
+            SCHEDULED.afs, residual_gain=30.0)), True),
+        "the same, gain schedule (c_L = 0.5, kappa = 100)": (SCHEDULED, True),
+        "the same, gain schedule (kappa = 100), no supervisor":
+            (replace(SCHEDULED, relock_tolerance=None), True),
+        "AFO pool, supervisor": (OnlineParameters(canonical="afo"), True),
         "offline": (None, True),
     }
     errors = {name: [] for name in variants}

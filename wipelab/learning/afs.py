@@ -16,9 +16,9 @@ the top of the expected range (3 Hz for wiping), and the gains scale with the fr
 
 In the learner the approach from above is only the fallback: the start-up period detector
 normally hands the series its frequency, phase and coefficients after about two periods
-(:meth:`AdaptiveFourierSeries.lock`); locked, the series couples weakly while it fits and
-strongly while its fit residual is large (the gain schedule of
-:mod:`wipelab.learning.oscillators`).
+(:meth:`AdaptiveFourierSeries.lock`). A gain schedule after the lock (couple weakly while
+the series fits, strongly while its residual is large) is available and off by default: see
+:mod:`wipelab.learning.oscillators`.
 
 ``AFSParameters.petric()`` gives the published constant gains. Several DOFs share phi and
 Omega. Integrated with explicit Euler substeps; series terms at or above the Nyquist
@@ -53,8 +53,8 @@ class AFSParameters:
     initial_frequency_hz: float = 3.0  # Omega(0) / 2 pi (Hz): the top of the expected range
     min_frequency_hz: float = 0.05     # Omega is kept in [min, max] (Hz)
     max_frequency_hz: float = 10.0
-    locked_coupling: float = 0.5       # c_L: once locked, K, K_Omega x (c_L + kappa E), E = mean e^2
-    residual_gain: float = 30.0        # kappa
+    locked_coupling: float = 1.0       # c_L: once locked, K, K_Omega x (c_L + kappa E), E = mean e^2
+    residual_gain: float = 0.0         # kappa (the gain schedule is off by default)
     residual_periods: float = 1.0      # E is low-passed over this many periods
 
     @classmethod

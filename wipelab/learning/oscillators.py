@@ -9,23 +9,22 @@ at every frequency, and so is its convergence measured in periods. Eq. 2 also ge
 gain K_Omega: with K_Omega = K (eqs. 1-2 as printed) the linearised loop
 s^2 + k s + k = 0 (k = K A / 2) keeps a pole near -1 rad/s however large K is.
 
-Gain schedule after the lock. Once a canonical system has been locked onto a detected
-period (its ``lock`` method), its coupling gains K and K_Omega are multiplied by
-c_L + kappa E, where E is the fit residual (mean e^2 over the DOFs, low-passed over about a
-period; 2-5e-4 with 2 % noise when the series fits): a weaker coupling when converged, a
-stronger one when the movement changes. Measured for the AFS with c_L = 0.5, kappa = 30
-(its defaults) against c_L = 1, kappa = 0: after the benchmark's frequency steps it
-re-converges in 2.41-2.90 instead of 2.91-3.30 periods. kappa = 100 was faster on those
-clean signals (2.06-2.24 periods; over 150 start-ups the fundamental's largest deviation
-after the hand-over 0.47 instead of 0.56 %), but on human-like demonstrations (a wandering
-tempo, drifting amplitude and centre: ``benchmarks/bench_learn.py``) the residual there is
-large, the coupling grew tenfold and the AFS drifted to subharmonics: with the supervisor
-of :mod:`wipelab.learning.online`, 2 of 27 such demonstrations ended more than 1 % off (worst
-5 %, five re-locks), without it 11 (worst 88 %); kappa = 30 keeps all 27 within 0.8 % with
-at most three hand-overs (without the supervisor 3 off, worst 69 %). The pool, with lower gains (K_Omega = 6), is best without it: after a
-step 2.6-2.9 periods, 5.2-5.9 with c_L = 0.5, 3.2-3.3 with kappa = 50. Before the lock the
-schedule is off: with the large residual of an unlocked oscillator it made the fallback (no
-period detected) slower and less stable (kappa = 100: up to 11 periods, or no lock).
+Gain schedule after the lock (off by default: c_L = 1, kappa = 0). Once a canonical system
+has been locked onto a detected period (its ``lock`` method), its coupling gains K and
+K_Omega can be multiplied by c_L + kappa E, where E is the fit residual (mean e^2 over the
+DOFs, low-passed over about a period; 2-5e-4 with 2 % noise when the series fits): a weaker
+coupling when converged, a stronger one when the movement changes. On the clean signals of
+``benchmarks/bench_learn.py`` the AFS with c_L = 0.5, kappa = 100 re-converges after a
+frequency step in 2.06-2.24 instead of 2.91-3.31 periods. On human-like demonstrations (a
+wandering tempo, drifting amplitude and centre, two gaps; same benchmark) the residual stays
+large, the coupling grows tenfold and the AFS drifts to subharmonics: 4 of 27 model
+frequencies more than 1 % off (worst 18 %) with the supervisor of
+:mod:`wipelab.learning.online`, 11 (worst 88 %) without; with kappa = 30 all 27 within
+0.79 %, without the schedule within 0.72 %. Robustness on people's movements decides: off.
+The pool, with lower gains (K_Omega = 6), is also best without it: after a step 2.6-2.9
+periods, 5.2-5.9 with c_L = 0.5, 3.2-3.3 with kappa = 50. Before the lock the schedule never
+applies: with the large residual of an unlocked oscillator it made the fallback (no period
+detected) slower and less stable (kappa = 100: up to 11 periods, or no lock).
 
 Several DOFs share one phase. The *reference* DOF defines it: its component at an
 oscillator's frequency is a pure cosine of that oscillator's phase (the beta coefficient is
