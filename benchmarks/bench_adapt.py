@@ -17,8 +17,10 @@ beside two baselines; simulation speed.
 4. Speed: simulated seconds per wall-clock second (and per CPU second of the process, which
    the other jobs of a shared machine do not inflate) of the control loop alone (headless, no
    logging; median of three runs) and of each stage with its MCAP/Rerun logging, run in this
-   process; and of one whole ``wipelab adapt`` command (Python start-up and imports included).
-   The load average is printed with it.
+   process; and of one whole ``wipelab adapt`` command (Python start-up, imports and loading
+   the compiled kernels from numba's cache included; CPU of the child process). The loop runs
+   first, so the stage rows do not include the one-time kernel loading (the first stage still
+   includes Rerun's start-up). The load average is printed with it.
 
 Prints the tables; targets in brackets.
 """
@@ -28,6 +30,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import shutil
 import statistics
 import subprocess
@@ -42,13 +45,15 @@ WIPELAB = [sys.executable, "-c", "from wipelab.cli import main; main()"]
 F0 = 10.0
 
 
-def wipelab(*args: str) -> float:
-    """Run ``wipelab ARGS`` in a new process; returns the wall time (s)."""
-    start = time.perf_counter()
+def wipelab(*args: str) -> tuple[float, float]:
+    """Run ``wipelab ARGS`` in a new process; returns its wall and CPU time (s)."""
+    start, children = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
     done = subprocess.run([*WIPELAB, *args], capture_output=True, text=True)
     if done.returncode != 0:
         sys.exit(f"wipelab {' '.join(args)} failed ({done.returncode}):\n{done.stderr}")
-    return time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime + after.ru_stime) - (children.ru_utime + children.ru_stime)
+    return time.perf_counter() - start, cpu
 
 
 def timed(function, *args, **kwargs):
@@ -85,8 +90,9 @@ def learn_model(work: Path) -> Path:
 
 def loop_speed(model_path: Path, seconds: float = 20.0) -> tuple[float, float]:
     """Sim s per wall s and per CPU s of the control loop alone: compliance + learning on the
-    flat table, no logging."""
-    from wipelab.control import ForceProfileLearner
+    flat table (the learned waveform read at the end of every period, as adapt does), no
+    logging."""
+    from wipelab.control import COMPARISON_PHASES, ForceProfileLearner
     from wipelab.model_file import read_model
     from wipelab.sim.path import PathGenerator, place_model
     from wipelab.sim.surfaces import load_surface
@@ -104,12 +110,17 @@ def loop_speed(model_path: Path, seconds: float = 20.0) -> tuple[float, float]:
         learner = ForceProfileLearner(model.kernels, model.width, model.alpha_s, model.beta_s,
                                       task.start_height, 1.0, session.dt)
         omega = model.omega / 4
+        task.world.set_tool_speed(path.max_speed(omega))
+        period_end = 2.0 * np.pi
         begin, wall, cpu = session.time, time.perf_counter(), time.process_time()
         while session.time - begin < seconds:
             xy, velocity, acceleration = path.step(omega, session.dt)
             session.tick(xy, task.start_height, True, path.phase, velocity=np.append(velocity, 0),
                          acceleration=np.append(acceleration, 0))
             learner.update(session.trace.last("tcp_cmd")[2], path.phase, omega)
+            if path.phase >= period_end:
+                period_end += 2.0 * np.pi
+                learner.waveform(COMPARISON_PHASES)
         return (seconds / (time.perf_counter() - wall), seconds / (time.process_time() - cpu))
     finally:
         task.close()
@@ -134,7 +145,13 @@ def main() -> None:
     work.mkdir(parents=True, exist_ok=True)
     model_path = learn_model(work)
 
-    learning_rows, replay_rows, paper_rows, speed_rows = [], [], [], []
+    loops = [loop_speed(model_path) for _ in range(3)]
+    wall_speed = statistics.median(s for s, _ in loops)
+    cpu_speed = statistics.median(c for _, c in loops)
+    speed_rows = [["control loop alone (headless, no logging; median of 3)", "20.0",
+                   f"{20.0 / wall_speed:.2f}", f"{wall_speed:.1f}", f"{cpu_speed:.1f}",
+                   f"{os.getloadavg()[0]:.1f}"]]
+    learning_rows, replay_rows, paper_rows = [], [], []
     for surface in args.surfaces:
         for reference in ("learned", "start"):
             out = work / f"adapt_{surface}" if reference == "learned" else \
@@ -201,19 +218,13 @@ def main() -> None:
     print(table(["surface", "scale", "mode", "RMS(|F|-F0) N", "contact %", "peak N"],
                 paper_rows))
 
-    loops = [loop_speed(model_path) for _ in range(3)]
-    wall_speed = statistics.median(s for s, _ in loops)
-    cpu_speed = statistics.median(c for _, c in loops)
-    speed_rows.insert(0, ["control loop alone (headless, no logging; median of 3)", "20.0",
-                          f"{20.0 / wall_speed:.2f}", f"{wall_speed:.1f}", f"{cpu_speed:.1f}",
-                          f"{os.getloadavg()[0]:.1f}"])
     out = work / "adapt_cli"
-    wall = wipelab("adapt", str(model_path), "-o", str(out), "--surface", "flat", "-q")
+    wall, cpu = wipelab("adapt", str(model_path), "-o", str(out), "--surface", "flat", "-q")
     sim = json.loads((out / "metrics.json").read_text())["sim_time_s"]
-    speed_rows.append([f"wipelab adapt flat (whole command, {os.cpu_count()} CPUs)",
-                       f"{sim:.1f}", f"{wall:.2f}", f"{sim / wall:.1f}", "-",
-                       f"{os.getloadavg()[0]:.1f}"])
-    print("\nSpeed (simulated s per wall-clock s [>= 10, aim 50]; per CPU s of this process)")
+    speed_rows.append(speed_row(f"wipelab adapt flat (whole command, {os.cpu_count()} CPUs)",
+                                sim, wall, cpu))
+    print("\nSpeed (simulated s per wall-clock s [>= 10, aim 50]; per CPU s of the process "
+          "that ran it)")
     print(table(["run", "sim s", "wall s", "sim/wall", "sim/CPU", "load avg"], speed_rows))
     if args.keep is None:
         shutil.rmtree(work)

@@ -63,7 +63,7 @@ def test_tracking_steps_are_rate_limited_and_follow_a_circle(arm, posture):
     errors = []
     for phase in np.linspace(0, 4 * np.pi, 960):      # 0.25 Hz at 120 Hz, two periods
         target = CENTRE + [0.1 * np.cos(phase), 0.1 * np.sin(phase), 0.0]
-        new = tracker.step(q, target)
+        new, _ = tracker.track(q, target, np.zeros(3))
         assert np.max(np.abs(new - q)) <= tracker.params.max_step + 1e-12
         q = new
         errors.append(np.linalg.norm(tracker.chain.forward(q)[:3, 3] - target))
@@ -79,8 +79,10 @@ def test_an_unreachable_target_is_reported_not_faked(arm, posture):
 def test_joint_velocity_gives_the_tcp_velocity(arm, posture):
     tracker = arm.tracker(posture)
     velocity = np.array([0.12, -0.05, 0.03])
-    qdot = tracker.joint_velocity(posture.arm, velocity)
-    _, jac = tracker.chain.jacobian(posture.arm)
+    target = tracker.chain.forward(posture.arm)[:3, 3] + [0.01, 0.0, -0.005]
+    q, qdot = tracker.track(posture.arm, target, velocity)
+    assert np.abs(q - posture.arm).max() > 1e-4          # velocities at the new targets
+    _, jac = tracker.chain.jacobian(q)
     assert jac[:3] @ qdot == pytest.approx(velocity, abs=1e-3)
 
 
@@ -98,3 +100,15 @@ def test_orientation_weight_turns_the_hand_to_a_target(posture):
     assert np.linalg.norm(rotation_error(reached[:3, :3], goal)) < 0.02
     assert np.linalg.norm(rotation_error(tracker.chain.forward(
         arm.tracker(posture).solve(posture.arm, start[:3, 3])[0])[:3, :3], goal)) > 0.1
+
+
+@pytest.mark.parametrize("m", [3, 6])
+def test_weighted_solution_kernel_matches_numpy(m):
+    """The compiled damped least squares (Cholesky in loops) against the formula in numpy."""
+    from wipelab.sim.ik import _weighted_solution
+
+    rng = np.random.default_rng(m)
+    rows, inv_cost, rhs = rng.normal(size=(m, 7)), rng.uniform(0.1, 1.0, 7), rng.normal(size=m)
+    weighted = rows * inv_cost
+    expected = weighted.T @ np.linalg.solve(weighted @ rows.T + 1e-4 * np.eye(m), rhs)
+    assert _weighted_solution(rows, weighted, rhs, 1e-4) == pytest.approx(expected, rel=1e-9)

@@ -36,6 +36,10 @@ def test_compliance_moves_down_until_it_presses_with_f0():
         assert trace["force"][last, 2].mean() == pytest.approx(8.0, abs=1.0)
         assert trace["sponge_force"][last].min() > 5.0
         assert trace["tcp_cmd"][-1, 2] < start[2] - 0.02
+        # q: torso (held) then the arm, as measured at the end of each period
+        assert trace["q"].shape == trace["q_cmd"].shape == (240, 10)
+        assert np.all(trace["q_cmd"][:, :3] == task.session.torso)
+        assert trace["q"][-1, 3:] == pytest.approx(task.session.q_arm, abs=0.01)
     finally:
         task.close()
 

@@ -1,5 +1,6 @@
 """Force control for wiping: the velocity-resolved compliance of eqs. 9-12 and the online
-learning of the force profile (eqs. 13-15). Pure numpy.
+learning of the force profile (eqs. 13-15). Numpy, and a numba kernel for the learning's
+per-sample loop.
 
 Notation: F contact force on the tool (N, world, z up); F_0 target force; k_F force gain
 (m/(N s)); z commanded TCP height (m); phi phase (rad); Omega frequency (rad/s).

@@ -6,6 +6,9 @@ each control period gives y, y', y'' (a centred polynomial fit of the recent com
 heights, paired with the phase at the window's centre), the forcing target of the text after
 eq. 12, and one step of the incremental LWR of eqs. 13-15.
 
+The samples are learned in one compiled pass (numba) when the weights are next needed, as
+the house pattern: the kernel is tested against the numpy reference of the learning package.
+
 Convergence is judged once per period: the learned waveform (the DMP's limit cycle, on a
 grid of phases) is compared with the one a period before; learning has converged when the
 largest change is below ``tolerance`` for ``stable_periods`` periods in a row, after at least
@@ -14,16 +17,22 @@ largest change is below ``tolerance`` for ``stable_periods`` periods in a row, a
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
-from wipelab.learning import IncrementalLWR, forcing_target, kernel_activations, limit_cycle
-from wipelab.learning.derivatives import CentredDerivatives
+from wipelab.learning import kernel_centres, limit_cycle
+from wipelab.learning.derivatives import savgol_centre_coefficients, window_for
 
 #: Phases at which learned waveforms are compared (rad).
 COMPARISON_PHASES = np.linspace(0.0, 2.0 * math.pi, 128, endpoint=False)
+#: Degree of the centred polynomial fit that gives y, y', y''.
+DERIVATIVE_DEGREE = 3
+#: Most samples in that fit's window.
+MAX_WINDOW = 1001
 
 
 #: Accepted values of ``ProfileLearningParams.reference``.
@@ -59,6 +68,15 @@ class ProfileLearningParams:
 class ForceProfileLearner:
     """Learns one DOF (z) of a periodic DMP online from the commanded height.
 
+    Per sample, as the paper's online learning: a centred cubic fit of the recent heights
+    (:class:`~wipelab.learning.derivatives.CentredDerivatives`: ``derivative_window`` of a
+    period, at most :data:`MAX_WINDOW` samples) gives y, y', y'' at the window's centre, paired
+    with the phase and Omega recorded there; the forcing target (text after eq. 12) and the
+    kernels at that phase (eq. 8) make one step of the incremental LWR (eqs. 13-15, started at
+    w = 0, P = 1). The samples are queued by :meth:`update` and learned in one compiled pass
+    (:func:`learn_heights`) when the weights are next read: the result is the same as
+    learning each at once.
+
     Parameters
     ----------
     n_kernels, width, alpha_s, beta_s : as the x-y model (eqs. 6-8).
@@ -77,34 +95,94 @@ class ForceProfileLearner:
         self.n_kernels, self.width = int(n_kernels), float(width)
         self.alpha_s, self.beta_s = float(alpha_s), float(beta_s)
         self.goal, self.amplitude = float(goal), float(amplitude)
+        self.dt = float(dt)
         self.params = params
-        self.lwr = IncrementalLWR(self.n_kernels, 1, forgetting=params.forgetting)
-        self.derivatives = CentredDerivatives(1, dt, params.derivative_window, degree=3,
-                                              max_window=1001)
-        self.updates_ = 0
+        self._weights = np.zeros(self.n_kernels)
+        self._p = np.ones(self.n_kernels)
+        self._centres = kernel_centres(self.n_kernels)
+        # samples not yet learned, after the MAX_WINDOW - 1 before them (the fit's history)
+        self._heights: list[float] = []
+        self._phases: list[float] = []
+        self._omegas: list[float] = []
+        self._learned = 0     # samples of the lists already learned
+        self._count = 0       # samples received in all
 
     @property
     def weights_(self) -> np.ndarray:
         """Learned weights (N,)."""
-        return self.lwr.weights_[0].copy()
+        self._learn_queued()
+        return self._weights.copy()
 
     def update(self, height: float, phase: float, omega: float) -> None:
         """Feed the commanded height Y (m) at canonical phase (rad) and Omega (rad/s)."""
-        self.derivatives.push(np.array([height]), phase, omega)
-        estimate = self.derivatives.centre(omega)
-        if estimate is None:
+        self._heights.append(float(height))
+        self._phases.append(float(phase))
+        self._omegas.append(float(omega))
+        self._count += 1
+
+    def _learn_queued(self) -> None:
+        new = len(self._heights) - self._learned
+        if not new:
             return
-        y, yd, ydd, centre_phase, centre_omega = estimate
-        target = forcing_target(y, yd, ydd, centre_omega, self.goal, self.alpha_s, self.beta_s)
-        psi = kernel_activations(centre_phase, self.n_kernels, self.width)
-        self.lwr.update(psi, np.array([self.amplitude]), target)
-        self.updates_ += 1
+        heights, phases, omegas = (np.array(v) for v in (self._heights, self._phases,
+                                                         self._omegas))
+        # the fit's window follows the Omega given with each sample
+        unique, which = np.unique(omegas[self._learned:], return_inverse=True)
+        windows = np.array([window_for(o, self.dt, self.params.derivative_window, MAX_WINDOW)
+                            for o in unique])[which]
+        first_count = self._count - len(heights)     # samples before the lists' first
+        k = self._learned
+        for window, run in itertools.groupby(windows.tolist()):
+            stop = k + len(list(run))
+            learn_heights(heights, phases, omegas, k, stop, first_count, window,
+                          savgol_centre_coefficients(window, DERIVATIVE_DEGREE), self.dt,
+                          self.goal, self.amplitude, self.alpha_s, self.beta_s, self._centres,
+                          self.width, self.params.forgetting, self._weights, self._p)
+            k = stop
+        keep = max(0, len(heights) - (MAX_WINDOW - 1))
+        del self._heights[:keep], self._phases[:keep], self._omegas[:keep]
+        self._learned = len(self._heights)
 
     def waveform(self, phase) -> np.ndarray:
         """The learned height (m) at phases (n,) (the DMP's limit cycle), shape (n,)."""
-        return limit_cycle(np.asarray(phase, dtype=float).reshape(-1), self.lwr.weights_,
+        return limit_cycle(np.asarray(phase, dtype=float).reshape(-1), self.weights_[None, :],
                            np.array([self.goal]), np.array([self.amplitude]), self.width,
                            self.alpha_s, self.beta_s)[:, 0]
+
+
+@njit(cache=True)
+def learn_heights(heights, phases, omegas, start, stop, first_count, window, coefficients, dt,
+                  goal, amplitude, alpha_s, beta_s, centres, width, forgetting, weights, p):
+    """Learn samples ``start`` to ``stop`` (exclusive) of ``heights`` (m; with their
+    ``phases`` rad and ``omegas`` rad/s), updating ``weights`` and ``p`` (N,) in place.
+
+    Sample k is the (``first_count`` + k + 1)-th received; once ``window`` have been received,
+    its window is samples k - window + 1 .. k, fitted with ``coefficients`` (3, window) of
+    :func:`~wipelab.learning.derivatives.savgol_centre_coefficients`. Then, as
+    :func:`~wipelab.learning.dmp.forcing_target`,
+    :func:`~wipelab.learning.kernels.kernel_activations` (kernel ``centres`` (N,), ``width``)
+    and :meth:`~wipelab.learning.lwr.IncrementalLWR.update` (p: its P, r = ``amplitude``).
+    """
+    for k in range(start, stop):
+        if first_count + k + 1 < window:
+            continue
+        first = k + 1 - window
+        y = yd = ydd = 0.0
+        for j in range(window):
+            value = heights[first + j]
+            y += coefficients[0, j] * value
+            yd += coefficients[1, j] * value
+            ydd += coefficients[2, j] * value
+        yd /= dt
+        ydd /= dt ** 2
+        centre = first + (window - 1) // 2
+        phase, omega = phases[centre], omegas[centre]
+        target = ydd / omega ** 2 - alpha_s * (beta_s * (goal - y) - yd / omega)   # f_targ
+        for i in range(centres.size):
+            psi = math.exp(width * (math.cos(phase - centres[i]) - 1.0))          # eq. 8
+            error = target - weights[i] * amplitude                                 # eq. 15
+            p[i] = p[i] / (forgetting + psi * p[i] * amplitude ** 2)                # eq. 14
+            weights[i] += psi * p[i] * amplitude * error                            # eq. 13
 
 
 class ConvergenceMonitor:

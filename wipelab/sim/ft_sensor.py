@@ -107,13 +107,19 @@ def contact_wrench(reading: np.ndarray, rotation: np.ndarray, payload: PayloadMo
     sensor origin, world axes).
     """
     rotation = np.asarray(rotation, dtype=float)
-    weight = payload.mass * gravity
-    force = payload.mass * np.asarray(acceleration, dtype=float) - weight \
-        - rotation @ (reading[:3] - payload.force_bias)
-    (cx, cy, cz), (wx, wy, wz) = rotation @ payload.com, weight     # lever x weight
+    force = contact_force(reading, rotation, payload, acceleration, gravity)
+    (cx, cy, cz), (wx, wy, wz) = rotation @ payload.com, payload.mass * gravity  # lever x weight
     lever_torque = np.array([cy * wz - cz * wy, cz * wx - cx * wz, cx * wy - cy * wx])
     torque = -rotation @ (reading[3:] - payload.torque_bias) - lever_torque
     return force, torque
+
+
+def contact_force(reading: np.ndarray, rotation: np.ndarray, payload: PayloadModel,
+                  acceleration=np.zeros(3), gravity: np.ndarray = GRAVITY) -> np.ndarray:
+    """The force part of :func:`contact_wrench` alone (N, world), F_c = m (a - g) - R f_s:
+    what the control loop needs every period."""
+    return payload.mass * (np.asarray(acceleration, dtype=float) - gravity) \
+        - rotation @ (reading[:3] - payload.force_bias)
 
 
 class FirstOrderLowPass:
@@ -127,7 +133,7 @@ class FirstOrderLowPass:
     def __call__(self, x: np.ndarray) -> np.ndarray:
         x = np.asarray(x, dtype=float)
         self.state = x.copy() if self.state is None else self.state + self.alpha * (x - self.state)
-        return self.state.copy()
+        return self.state   # a new array every call: the caller may keep it
 
 
 class SensorImperfections:

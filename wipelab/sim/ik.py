@@ -42,9 +42,9 @@ class IKParams:
     limit_zone: float = 0.25         # rad: within this of a limit a joint's cost rises smoothly
     rest_gain: float = 0.3           # per iteration: pull toward the rest posture (null space)
     limit_margin: float = 0.02       # rad: joints are kept this far inside their limits
-    max_step: float = 0.025          # rad: largest joint change per ``step`` (3 rad/s at 120 Hz)
+    max_step: float = 0.025          # rad: largest joint change per ``track`` (3 rad/s at 120 Hz)
     solve_step: float = 0.2          # rad: largest joint change per iteration of ``solve``
-    iterations: int = 1              # iterations per call of ``step`` (resolved rate)
+    iterations: int = 1              # iterations per call of ``track`` (resolved rate)
     tolerance: float = 1e-3          # m: position error counted as "reached" by ``solve``
 
 
@@ -82,23 +82,20 @@ class ArmIK:
         return (p.orientation_weight > 0, np.asarray(rotation, dtype=float), p.orientation_weight,
                 *self._position_only[3:])
 
-    def step(self, q, position, rotation=None) -> np.ndarray:
-        """Joint targets (n,) moving the TCP from posture ``q`` toward ``position`` (3,) (m,
-        world) and, with weight, ``rotation`` (3, 3); ``params.iterations`` iterations of at
-        most ``params.max_step`` per joint."""
-        q = np.asarray(q, dtype=float)
-        position = np.asarray(position, dtype=float)
-        arguments = (*self.chain.arrays, *self._kernel_arguments(rotation))
-        for _ in range(self.params.iterations):
-            q = ik_iterate(*arguments[:4], q, position, *arguments[4:], self.params.max_step)
-        return q
+    def track(self, q, position, tcp_velocity, rotation=None) -> tuple[np.ndarray, np.ndarray]:
+        """One control period of resolved-rate tracking (one compiled call).
 
-    def joint_velocity(self, q, tcp_velocity) -> np.ndarray:
-        """Joint velocities (n,) (rad/s) giving the TCP velocity (3,) (m/s, world) at posture
-        ``q``: the weighted damped least squares of one iteration, without the null space."""
-        return ik_velocity(*self.chain.arrays, np.asarray(q, dtype=float),
-                           np.asarray(tcp_velocity, dtype=float), self.lower, self.upper,
-                           self.cost, self.params.limit_zone, self.params.damping ** 2)
+        Returns the joint targets (n,) moving the TCP from posture ``q`` toward ``position``
+        (3,) (m, world) and, with weight, ``rotation`` (3, 3) (``params.iterations``
+        iterations of at most ``params.max_step`` per joint), and the joint velocities (n,)
+        (rad/s) that give the TCP velocity ``tcp_velocity`` (3,) (m/s, world) at those
+        targets: the weighted damped least squares of one iteration without the null space
+        (the servos' feed-forward).
+        """
+        return ik_track(*self.chain.arrays, np.asarray(q, dtype=float),
+                        np.asarray(position, dtype=float), np.asarray(tcp_velocity, dtype=float),
+                        *self._kernel_arguments(rotation), self.params.max_step,
+                        self.params.iterations)
 
     def solve(self, q, position, rotation=None, max_iterations: int = 200
               ) -> tuple[np.ndarray, float]:
@@ -123,23 +120,50 @@ def _inverse_costs(q, lower, upper, cost, limit_zone) -> np.ndarray:
 
 @njit(cache=True)
 def _weighted_solution(rows, weighted, rhs, damping2) -> np.ndarray:
-    """W^-1 J^T (J W^-1 J^T + lambda^2 I)^-1 rhs with ``weighted`` = J W^-1 (m, n)."""
-    m = rows.shape[0]
-    gram = damping2 * np.eye(m)
+    """W^-1 J^T (J W^-1 J^T + lambda^2 I)^-1 rhs with ``weighted`` = J W^-1 (m, n).
+
+    The m x m system (m <= 6, symmetric positive definite for lambda > 0) is solved by
+    Cholesky in plain loops: at this size a LAPACK/BLAS call costs more than the arithmetic.
+    """
+    m, n = rows.shape
+    gram = np.empty((m, m))
     for a in range(m):
-        for b in range(m):
-            gram[a, b] += np.dot(weighted[a], rows[b])
-    solution = np.linalg.solve(gram, rhs)
-    dq = np.zeros(rows.shape[1])
+        for b in range(a + 1):
+            total = 0.0
+            for j in range(n):
+                total += weighted[a, j] * rows[b, j]
+            gram[a, b] = total
+        gram[a, a] += damping2
+    # gram = L L^T, L in the lower triangle; then L y = rhs, L^T x = y
+    for a in range(m):
+        for b in range(a + 1):
+            total = gram[a, b]
+            for k in range(b):
+                total -= gram[a, k] * gram[b, k]
+            gram[a, b] = math.sqrt(total) if a == b else total / gram[b, b]
+    solution = np.empty(m)
+    for a in range(m):
+        total = rhs[a]
+        for k in range(a):
+            total -= gram[a, k] * solution[k]
+        solution[a] = total / gram[a, a]
+    for a in range(m - 1, -1, -1):
+        total = solution[a]
+        for k in range(a + 1, m):
+            total -= gram[k, a] * solution[k]
+        solution[a] = total / gram[a, a]
+    dq = np.zeros(n)
     for r in range(m):
-        dq += solution[r] * weighted[r]
+        for j in range(n):
+            dq[j] += solution[r] * weighted[r, j]
     return dq
 
 
 @njit(cache=True)
 def ik_velocity(before, axes, prismatic, tail, q, tcp_velocity, lower, upper, cost, limit_zone,
                 damping2) -> np.ndarray:
-    """Joint velocities (n,) for a TCP velocity (3,) at ``q`` (see :meth:`ArmIK.joint_velocity`)."""
+    """Joint velocities (n,) for a TCP velocity (3,) at ``q``: W^-1 J^T (J W^-1 J^T +
+    lambda^2 I)^-1 v with the position rows of J (see :meth:`ArmIK.track`)."""
     jac = np.empty((6, q.size))
     chain_jacobian(before, axes, prismatic, tail, q, jac)
     rows = np.ascontiguousarray(jac[:3])
@@ -178,8 +202,11 @@ def ik_iterate(before, axes, prismatic, tail, q, position, use_rotation, rotatio
     for _ in range(3):
         weighted = rows * (inv_cost * free)
         free_posture = posture * free
-        dq = _weighted_solution(rows, weighted, error - rows @ free_posture, damping2) \
-            + free_posture
+        rhs = error.copy()
+        for r in range(m):
+            for j in range(n):
+                rhs[r] -= rows[r, j] * free_posture[j]
+        dq = _weighted_solution(rows, weighted, rhs, damping2) + free_posture
         scale = np.max(np.abs(dq)) / max_step
         if scale > 1.0:
             dq /= scale
@@ -192,6 +219,20 @@ def ik_iterate(before, axes, prismatic, tail, q, position, use_rotation, rotatio
         if not hit:
             break
     return np.minimum(np.maximum(candidate, lower), upper)
+
+
+@njit(cache=True)
+def ik_track(before, axes, prismatic, tail, q, position, tcp_velocity, use_rotation, rotation,
+             orientation_weight, lower, upper, cost, rest, limit_zone, rest_gain, damping2,
+             max_step, iterations) -> tuple[np.ndarray, np.ndarray]:
+    """``iterations`` of :func:`ik_iterate`, then :func:`ik_velocity` at the result (see
+    :meth:`ArmIK.track`); returns (q, joint velocities)."""
+    for _ in range(iterations):
+        q = ik_iterate(before, axes, prismatic, tail, q, position, use_rotation, rotation,
+                       orientation_weight, lower, upper, cost, rest, limit_zone, rest_gain,
+                       damping2, max_step)
+    return q, ik_velocity(before, axes, prismatic, tail, q, tcp_velocity, lower, upper, cost,
+                          limit_zone, damping2)
 
 
 @njit(cache=True)

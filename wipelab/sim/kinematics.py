@@ -250,20 +250,34 @@ class KinematicChain:
 # -- compiled kernels (numba): the IK calls them every control period ------------------------
 
 @njit(cache=True)
-def _joint_motion(axis: np.ndarray, prismatic: float, value: float) -> np.ndarray:
-    """Motion (4, 4) of one joint: Rodrigues' rotation about ``axis`` (3,) or a translation."""
-    motion = np.eye(4)
+def _joint_motion(axis: np.ndarray, prismatic: float, value: float, motion: np.ndarray) -> None:
+    """Write the motion (4, 4) of one joint into ``motion`` (whose bottom row is 0 0 0 1):
+    Rodrigues' rotation about ``axis`` (3,) or a translation along it."""
     if prismatic:
-        motion[0, 3], motion[1, 3], motion[2, 3] = axis[0] * value, axis[1] * value, \
-            axis[2] * value
-        return motion
+        for r in range(3):
+            for k in range(3):
+                motion[r, k] = 1.0 if r == k else 0.0
+            motion[r, 3] = axis[r] * value
+        return
     x, y, z = axis[0], axis[1], axis[2]
     s, c = math.sin(value), math.cos(value)
     v = 1.0 - c
     motion[0, 0], motion[0, 1], motion[0, 2] = c + x * x * v, x * y * v - z * s, x * z * v + y * s
     motion[1, 0], motion[1, 1], motion[1, 2] = x * y * v + z * s, c + y * y * v, y * z * v - x * s
     motion[2, 0], motion[2, 1], motion[2, 2] = x * z * v - y * s, y * z * v + x * s, c + z * z * v
-    return motion
+    motion[0, 3], motion[1, 3], motion[2, 3] = 0.0, 0.0, 0.0
+
+
+@njit(cache=True)
+def _compose(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
+    """out = a @ b for rigid transforms (4, 4) (bottom row 0 0 0 1; ``out``'s already is),
+    in plain loops: at this size a BLAS call and an allocation cost more than the 36
+    products."""
+    for r in range(3):
+        a0, a1, a2 = a[r, 0], a[r, 1], a[r, 2]
+        for k in range(4):
+            out[r, k] = a0 * b[0, k] + a1 * b[1, k] + a2 * b[2, k]
+        out[r, 3] += a[r, 3]
 
 
 @njit(cache=True)
@@ -273,15 +287,18 @@ def chain_frames(before, axes, prismatic, tail, q, origins, joint_axes) -> np.nd
     Fills ``origins`` (n, 3) and ``joint_axes`` (n, 3) with each active joint's position and
     unit axis in the root frame; returns the tip pose (4, 4).
     """
-    pose = np.eye(4)
+    pose, joint, motion = np.eye(4), np.eye(4), np.eye(4)
     for i in range(q.size):
-        pose = pose @ before[i]
+        _compose(pose, before[i], joint)
         for r in range(3):
-            origins[i, r] = pose[r, 3]
-            joint_axes[i, r] = (pose[r, 0] * axes[i, 0] + pose[r, 1] * axes[i, 1]
-                                + pose[r, 2] * axes[i, 2])
-        pose = pose @ _joint_motion(axes[i], prismatic[i], q[i])
-    return pose @ tail
+            origins[i, r] = joint[r, 3]
+            joint_axes[i, r] = (joint[r, 0] * axes[i, 0] + joint[r, 1] * axes[i, 1]
+                                + joint[r, 2] * axes[i, 2])
+        _joint_motion(axes[i], prismatic[i], q[i], motion)
+        _compose(joint, motion, pose)
+    tip = np.eye(4)
+    _compose(pose, tail, tip)
+    return tip
 
 
 @njit(cache=True)

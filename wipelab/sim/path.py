@@ -90,9 +90,10 @@ class PathGenerator:
     The output is the periodic DMP's steady state (its limit cycle, eqs. 6-7 solved in closed
     form by :func:`wipelab.learning.limit_cycle.limit_cycle`): started on it, integrating
     eqs. 6-7 gives exactly this, and the limit cycle does not depend on Omega, so a
-    frequency change only changes how fast the phase runs. The limit cycle and its second
-    phase derivative are tabulated once on :data:`TABLE_PHASES` phases per period and
-    interpolated linearly (as the limit cycle's own basis is; error below a micrometre).
+    frequency change only changes how fast the phase runs. The limit cycle and its first and
+    second phase derivatives are tabulated once, in one table, on :data:`TABLE_PHASES` phases
+    per period and interpolated linearly (as the limit cycle's own basis is; error below a
+    micrometre): one lookup per control period.
 
     Parameters
     ----------
@@ -107,29 +108,30 @@ class PathGenerator:
         self.model, self.dofs = model, tuple(dofs)
         self.phase = float(phase)
         grid = np.linspace(0.0, 2.0 * math.pi, TABLE_PHASES + 1)
-        self._position = dof_waveform(model, self.dofs, grid)
-        self._velocity = dof_waveform(model, self.dofs, grid, derivative=1)
-        self._acceleration = dof_waveform(model, self.dofs, grid, derivative=2)
+        # rows: phase; then position, first and second phase derivative, each (d,)
+        self._table = np.stack([dof_waveform(model, self.dofs, grid, derivative=k)
+                                for k in range(3)], axis=1)
 
-    def _lookup(self, table: np.ndarray) -> np.ndarray:
+    def _lookup(self) -> np.ndarray:
+        """Position and phase derivatives (3, d) at the current phase."""
         where = (self.phase % (2.0 * math.pi)) * (TABLE_PHASES / (2.0 * math.pi))
         index = min(int(where), TABLE_PHASES - 1)
         fraction = where - index
-        return table[index] * (1.0 - fraction) + table[index + 1] * fraction
+        return self._table[index] * (1.0 - fraction) + self._table[index + 1] * fraction
 
     @property
     def position(self) -> np.ndarray:
         """Output (d,) (m) at the current phase."""
-        return self._lookup(self._position)
+        return self._lookup()[0]
 
     def max_speed(self, omega: float) -> float:
         """Largest speed (m/s) of the output at Omega (rad/s)."""
-        return float(np.max(np.linalg.norm(self._velocity, axis=1))) * omega
+        return float(np.max(np.linalg.norm(self._table[:, 1], axis=1))) * omega
 
     def step(self, omega: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Advance the phase by omega dt (rad/s, s); returns the position (d,) (m), velocity
         (d,) (m/s) and acceleration (d,) (m/s^2) there (the feed-forward of the joint servos
         and of the inertia compensation)."""
         self.phase += omega * dt
-        return (self._lookup(self._position), self._lookup(self._velocity) * omega,
-                self._lookup(self._acceleration) * omega ** 2)
+        position, velocity, acceleration = self._lookup()
+        return position, velocity * omega, acceleration * (omega * omega)

@@ -1,10 +1,13 @@
 """Logging a wiping run to MCAP and Rerun (through :class:`wipelab.logs.StageRecorder`).
 
 Topics (``<stage>`` is ``adapt`` or ``replay``; all times are simulated seconds). The
-controller's series (wrench, force, height, force_norm, contact) have every control period;
+controller's series (wrench, force, height, force_norm, contact) are logged at
+``SERIES_RATE_HZ`` (every second control period at 120 Hz: the force the controller uses is
+low-passed at 25 Hz, below that rate's Nyquist frequency; the metrics use every period);
 what is for looking at (the 3D scene, joint states, segment, phase) has ``POSE_RATE_HZ``.
 Each series is written in one go (:meth:`~wipelab.logs.StageRecorder.scalars`,
-``transform_series``, ``pose_series``, ``arrow_series``), not per time stamp.
+``transform_series``, ``pose_series``, ``arrow_series``), not per time stamp: an MCAP
+message costs ~20 us to write, as much as a tenth of a simulated control period.
 
 - ``/tf``: every URDF joint as a frame transform (parent link -> child link): fixed and held
   joints once, the 10 moving joints at ``POSE_RATE_HZ``; plus ``world -> sponge``.
@@ -46,6 +49,8 @@ from wipelab.sim.path import PATH_PHASES, dof_waveform
 
 #: Rate (Hz) of the 3D scene in the logs (poses, /tf, force arrow).
 POSE_RATE_HZ = 15.0
+#: Rate (Hz) of the controller's series in the logs (at most the control rate).
+SERIES_RATE_HZ = 60.0
 #: Length of the force arrow per newton (m/N).
 ARROW_SCALE = 0.01
 
@@ -118,7 +123,7 @@ def _log_poses(rec: StageRecorder, stage: str, task, trace: dict) -> None:
     """The 3D scene at :data:`POSE_RATE_HZ`: /tf of the moving joints and the sponge, the TCP
     poses and the force arrow, each as one series."""
     urdf_joints = parse_urdf_joints(armar3b_urdf_path().read_text())
-    pick = _pose_samples(task, trace)
+    pick = _samples(task, trace, POSE_RATE_HZ)
     t = trace["t"][pick]
     frames = []
     for name, values in zip(TORSO_JOINTS + RIGHT_ARM_JOINTS, trace["q"][pick].T):
@@ -136,37 +141,42 @@ def _log_poses(rec: StageRecorder, stage: str, task, trace: dict) -> None:
                      ARROW_SCALE * trace["force"][pick])
 
 
-def _pose_samples(task, trace: dict) -> slice:
-    """The control periods logged at :data:`POSE_RATE_HZ`."""
-    every = max(1, int(round(1.0 / (POSE_RATE_HZ * task.world.config.dt))))
+def _samples(task, trace: dict, rate_hz: float) -> slice:
+    """The control periods logged at ``rate_hz``: every k-th, k = control rate / rate_hz
+    rounded (at least 1)."""
+    every = max(1, int(round(1.0 / (rate_hz * task.world.config.dt))))
     return slice(0, len(trace["t"]), every)
 
 
 def _log_series(rec: StageRecorder, stage: str, task, trace: dict, segments) -> None:
     t = trace["t"]
-    pick = _pose_samples(task, trace)
+    pick = _samples(task, trace, POSE_RATE_HZ)
     names = list(TORSO_JOINTS + RIGHT_ARM_JOINTS)
     rec.scalars("/robot/joint_states/position", t[pick], trace["q"][pick], names=names)
     rec.scalars("/robot/joint_states/command", t[pick], trace["q_cmd"][pick], names=names)
-    rec.scalars(f"/{stage}/wrench", t, trace["wrench"],
-                names=["fx", "fy", "fz", "tx", "ty", "tz"])
-    norm = np.linalg.norm(trace["force"], axis=1)
-    rec.scalars(f"/{stage}/force", t, np.column_stack([trace["force"], norm]),
-                names=["fx", "fy", "fz", "norm"])
-    rec.scalars(f"/{stage}/height", t, np.column_stack([trace["tcp_cmd"][:, 2],
-                                                        trace["tcp"][:, 2], trace["z_ref"]]),
-                names=["commanded", "actual", "reference"])
-    target = np.full(len(t), task.options.compliance.target_force)
-    rec.scalars(f"/{stage}/force_norm", t, np.column_stack([norm, target, trace["sponge_force"]]),
-                names=["measured |F|", "F0", "true contact"])
-    contact = (trace["sponge_force"] > 1.0).astype(float)
-    rec.scalars(f"/{stage}/contact", t, np.column_stack([contact, trace["compression"],
-                                                         trace["vz"]]),
-                names=["contact", "compression_m", "compliance_velocity"])
     rec.scalars(f"/{stage}/segment", t[pick], trace["mode"][pick].astype(float),
                 names=["segment"])
     rec.scalars(f"/{stage}/phase", t[pick],
                 np.mod(np.nan_to_num(trace["phase"][pick]), 2 * np.pi), names=["phase"])
+    every = _samples(task, trace, SERIES_RATE_HZ)
+    series = {key: trace[key][every] for key in ("t", "wrench", "force", "tcp_cmd", "tcp",
+                                                 "z_ref", "sponge_force", "compression", "vz")}
+    rec.scalars(f"/{stage}/wrench", series["t"], series["wrench"],
+                names=["fx", "fy", "fz", "tx", "ty", "tz"])
+    norm = np.linalg.norm(series["force"], axis=1)
+    rec.scalars(f"/{stage}/force", series["t"], np.column_stack([series["force"], norm]),
+                names=["fx", "fy", "fz", "norm"])
+    rec.scalars(f"/{stage}/height", series["t"],
+                np.column_stack([series["tcp_cmd"][:, 2], series["tcp"][:, 2], series["z_ref"]]),
+                names=["commanded", "actual", "reference"])
+    target = np.full(len(norm), task.options.compliance.target_force)
+    rec.scalars(f"/{stage}/force_norm", series["t"],
+                np.column_stack([norm, target, series["sponge_force"]]),
+                names=["measured |F|", "F0", "true contact"])
+    contact = (series["sponge_force"] > 1.0).astype(float)
+    rec.scalars(f"/{stage}/contact", series["t"],
+                np.column_stack([contact, series["compression"], series["vz"]]),
+                names=["contact", "compression_m", "compliance_velocity"])
     for segment in segments:
         rec.json(f"/{stage}/events", max(segment.start, float(t[0])),
                  {"event": segment.name, "mode": segment.mode}, "wipelab.Event",

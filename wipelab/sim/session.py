@@ -17,7 +17,7 @@ import numpy as np
 from wipelab.control.compliance import (ComplianceIntegrator, ComplianceParams, feedback_force,
                                         safety_tripped)
 from wipelab.sim.ft_sensor import (FirstOrderLowPass, FTSensorParams, PayloadModel,
-                                   contact_wrench, identify_payload)
+                                   contact_force, identify_payload)
 from wipelab.sim.ik import ArmIK
 from wipelab.sim.world import SimWorld, StepResult
 
@@ -53,9 +53,18 @@ class Trace:
         return self.rows[-1][key]
 
     def arrays(self) -> dict[str, np.ndarray]:
+        """One array per key, rows in time order. A value appended as a tuple of arrays (e.g.
+        the torso and the arm part of q) becomes their concatenation."""
         if not self.rows:
             return {}
-        return {key: np.asarray([row[key] for row in self.rows]) for key in self.rows[0]}
+        columns = {}
+        for key, first in self.rows[0].items():
+            if isinstance(first, tuple):
+                columns[key] = np.concatenate([np.asarray([row[key][i] for row in self.rows])
+                                               for i in range(len(first))], axis=1)
+            else:
+                columns[key] = np.asarray([row[key] for row in self.rows])
+        return columns
 
     def __len__(self) -> int:
         return len(self.rows)
@@ -152,9 +161,8 @@ class WipingSession:
         """Contact force (3,) (N, world) from the last reading: compensated and filtered."""
         if self.last is None:
             return np.zeros(3)
-        force, _ = contact_wrench(self.last.wrench, self.last.sensor_rotation, self.payload,
-                                  self.acceleration)
-        return self.lowpass(force)
+        return self.lowpass(contact_force(self.last.wrench, self.last.sensor_rotation,
+                                          self.payload, self.acceleration))
 
     def tick(self, xy, z_ref: float, compliance_on: bool, phase: float = np.nan,
              velocity=np.zeros(3), acceleration=np.zeros(3), mode: int = 0) -> StepResult:
@@ -196,14 +204,14 @@ class WipingSession:
 
     def _command_and_step(self, target: np.ndarray, velocity, z_ref: float, phase: float,
                           mode: int) -> StepResult:
-        self.q_arm = self.tracker.step(self.q_arm, target)
-        self.world.command(self.q_arm, self.tracker.joint_velocity(self.q_arm, velocity))
+        self.q_arm, joint_velocity = self.tracker.track(self.q_arm, target, velocity)
+        self.world.command(self.q_arm, joint_velocity)
         result = self.world.step()
         self.last = result
+        torso = self.torso
         self.trace.append(
             t=self.world.time, phase=phase, tcp_cmd=target, tcp=result.tcp,
-            tcp_rot=result.tcp_rotation, q_cmd=np.concatenate([self.torso, self.q_arm]),
-            q=np.concatenate([self.torso, result.q]),
+            tcp_rot=result.tcp_rotation, q_cmd=(torso, self.q_arm), q=(torso, result.q),
             force=self.force, wrench=result.wrench,
             feedback=feedback_force(self.force, self.compliance.feedback), z_ref=z_ref,
             z_offset=self.integrator.offset_, vz=self.integrator.velocity_,

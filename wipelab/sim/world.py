@@ -249,14 +249,15 @@ class SimWorld:
             pybullet.resetJointState(self.robot, j, value, physicsClientId=c)
         self._effort = self.effort.tolist()
         self._velocity_gains = [1.0] * len(start)
+        self._hold_velocity = [0.0] * len(start)
         self.set_tool_speed(0.0)
         self.targets = start.copy()
         self.command(start)
         self.imperfections = SensorImperfections(sensor, np.random.default_rng(seed))
         self.time = 0.0
-        #: Force (3,) (N, world) applied to the sponge's centre at every physics step: a
-        #: disturbance, or a known load for checking the F/T sensor.
-        self.external_force = np.zeros(3)
+        #: Force (3,) (N, world) applied to the sponge's centre at every physics step (None:
+        #: none): a disturbance, or a known load for checking the F/T sensor.
+        self.external_force: np.ndarray | None = None
 
     def close(self) -> None:
         """Disconnect the PyBullet client (idempotent)."""
@@ -293,43 +294,48 @@ class SimWorld:
         corrections outside it (the force feedback's) through their position loop.
         """
         self._start = self.targets
-        self.targets = np.asarray(q, dtype=float).copy()
-        self._velocity = ([0.0] * self.targets.size if velocity is None
+        self.targets = np.array(q, dtype=float)
+        self._velocity = (self._hold_velocity if velocity is None
                           else np.asarray(velocity, dtype=float).tolist())
 
     def step(self) -> StepResult:
         """Run one control period of physics; return the measurements at its end."""
         c, robot, ft_joint = self.client, self.robot, self.ft_joint
         surface_id, sponge_link = self.surface_id, self.sponge_link
-        n, joints, velocity, servo = self.substeps, self.joint_ids, self._velocity, self._servo
+        joints, velocity, servo = self.joint_ids, self._velocity, self._servo
+        set_motors, step_simulation = pybullet.setJointMotorControlArray, pybullet.stepSimulation
+        get_joint_state, get_contact_points = pybullet.getJointState, pybullet.getContactPoints
+        control = pybullet.POSITION_CONTROL
         # the servos' targets at each physics step: linear from the last targets to the new
         targets = (self._start + self._fractions * (self.targets - self._start)).tolist()
-        wrench = np.zeros(6)
+        readings = []
         sponge_force = hand_force = 0.0
-        pushed = bool(self.external_force.any())
+        push = None if self.external_force is None else \
+            np.asarray(self.external_force, dtype=float).tolist()
         for target in targets:
-            pybullet.setJointMotorControlArray(robot, joints, pybullet.POSITION_CONTROL,
-                                               targetPositions=target, targetVelocities=velocity,
-                                               **servo)
-            if pushed:
+            set_motors(robot, joints, control, targetPositions=target, targetVelocities=velocity,
+                       **servo)
+            if push is not None:
                 centre = pybullet.getLinkState(robot, sponge_link, physicsClientId=c)[0]
-                pybullet.applyExternalForce(robot, sponge_link, self.external_force.tolist(),
-                                            centre, pybullet.WORLD_FRAME, physicsClientId=c)
-            pybullet.stepSimulation(physicsClientId=c)
-            wrench += pybullet.getJointState(robot, ft_joint, physicsClientId=c)[2]
-            for point in pybullet.getContactPoints(robot, surface_id, physicsClientId=c):
+                pybullet.applyExternalForce(robot, sponge_link, push, centre, pybullet.WORLD_FRAME,
+                                            physicsClientId=c)
+            step_simulation(physicsClientId=c)
+            readings.append(get_joint_state(robot, ft_joint, physicsClientId=c)[2])
+            for point in get_contact_points(robot, surface_id, physicsClientId=c):
                 if point[3] == sponge_link:
                     sponge_force += point[9]
                 else:
                     hand_force += point[9]
         self.time += self.config.dt
         self._start = self.targets          # reached: hold them until the next command
-        self._velocity = [0.0] * self.targets.size
+        self._velocity = self._hold_velocity
         states = pybullet.getJointStates(robot, self._state_joints, physicsClientId=c)
         hand, sponge = pybullet.getLinkStates(robot, self._pose_links, physicsClientId=c)
         hand_rotation = _matrix(hand[5])
+        n = len(targets)
+        wrench = np.array(readings).sum(axis=0) / n
         return StepResult(q=np.array([s[0] for s in states[:-1]]),
-                          wrench=self.imperfections(self.reading_convention(wrench / n)),
+                          wrench=self.imperfections(self.reading_convention(wrench)),
                           sensor_rotation=hand_rotation,
                           sponge_force=sponge_force / n, hand_force=hand_force / n,
                           compression=states[-1][0],

@@ -109,12 +109,12 @@ def _lower_onto(task: WipingTask, xy: np.ndarray, z: float, label: int) -> None:
         session.move_to([*xy, z], 0.6, mode=label)
 
 
-def _run_one(task: WipingTask, model: PeriodicModel, omega: float, mode: str, label: int,
+def _run_one(task: WipingTask, path: PathGenerator, omega: float, mode: str, label: int,
              params: ReplayParams, z_plane: float, bar) -> RunResult:
+    """One run of ``path`` (the model's x, y and, if adapted, z; restarted at phase 0)."""
     session = task.session
     dt = session.dt
-    has_z = "z" in model.dofs
-    path = PathGenerator(model, ("x", "y", "z") if has_z else ("x", "y"), phase=0.0)
+    path.phase = 0.0
     start = path.position
     learned = mode.startswith("learned")
     compliance_on = mode in ("learned+compliance", "compliance")
@@ -212,12 +212,13 @@ def run_replay(model_path: str | os.PathLike, out_dir: str | os.PathLike,
         steps = sum(int(math.ceil((params.periods + params.warmup_periods)
                                   / (base_hz * s * session.dt)))
                     for s in params.frequency_scales) * len(modes)
+        path = PathGenerator(model, ("x", "y", "z") if has_z else ("x", "y"))
         with tqdm(total=steps, desc="replay", unit="step", disable=quiet, leave=False) as bar:
             for scale in params.frequency_scales:
                 for mode in modes:
                     label = len(runs) + 1
                     segments.append(Segment(f"{scale:g}x {mode}", label, session.time))
-                    run = _run_one(task, model, 2.0 * math.pi * base_hz * scale, mode, label,
+                    run = _run_one(task, path, 2.0 * math.pi * base_hz * scale, mode, label,
                                    params, z_plane, bar)
                     runs.append(replace(run, scale=scale))
         segments.append(Segment("end", MOVE, session.time))
