@@ -17,8 +17,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba.extending import register_jitable
-from scipy.optimize import minimize_scalar
-from scipy.signal import lombscargle
 
 #: Most harmonics a fit uses (fewer when they would pass Nyquist).
 MAX_HARMONICS = 8
@@ -126,6 +124,8 @@ def estimate_fundamental_hz(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz:
 def _lomb_scargle_fundamental_hz(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz: float,
                                  dt: float) -> float:
     """:func:`estimate_fundamental_hz` for unevenly sampled data (the Lomb-Scargle periodogram)."""
+    from scipy.signal import lombscargle  # imported here: scipy.signal costs 0.5 s at start-up
+
     step = 1.0 / (8.0 * float(t[-1] - t[0]))
     candidates = np.arange(min_hz, max_hz + 0.5 * step, step)
     if candidates.size == 0:
@@ -142,6 +142,8 @@ def _lomb_scargle_fundamental_hz(t: np.ndarray, Y: np.ndarray, min_hz: float, ma
 def refine_frequency_hz(t: np.ndarray, Y: np.ndarray, initial_hz: float, half_width_hz: float,
                         n_harmonics: int | None = None) -> float:
     """The frequency in initial_hz +- half_width_hz that minimises the harmonic fit's residual."""
+    from scipy.optimize import minimize_scalar  # imported here: 0.5 s at start-up
+
     result = minimize_scalar(lambda f: 1.0 - harmonic_fit(t, Y, f, n_harmonics).explained,
                              bounds=(max(initial_hz - half_width_hz, 1e-6), initial_hz + half_width_hz),
                              method="bounded", options={"xatol": 1e-7 * initial_hz})
