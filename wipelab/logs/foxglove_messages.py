@@ -27,11 +27,18 @@ def vector3(v: np.ndarray) -> fm.Vector3:
 
 def unit_quaternion(q_xyzw) -> np.ndarray:
     """Quaternion (x, y, z, w) (4,) scaled to unit norm; a zero or non-finite one is rejected."""
-    q = np.asarray(q_xyzw, dtype=float).reshape(4)
-    norm = np.linalg.norm(q)
-    if not np.isfinite(norm) or norm == 0.0:
-        raise ValueError(f"quaternion (x, y, z, w) must be finite and non-zero, got {q.tolist()}")
-    return q / norm
+    return unit_quaternions(np.asarray(q_xyzw, dtype=float).reshape(1, 4))[0]
+
+
+def unit_quaternions(q_xyzw) -> np.ndarray:
+    """Quaternions (x, y, z, w) (n, 4) scaled to unit norm; a zero or non-finite one is rejected."""
+    q = np.asarray(q_xyzw, dtype=float).reshape(-1, 4)
+    norms = np.sqrt(np.einsum("ij,ij->i", q, q))
+    bad = ~(np.isfinite(norms) & (norms > 0.0))
+    if bad.any():
+        raise ValueError(f"quaternion (x, y, z, w) must be finite and non-zero, got "
+                         f"{q[np.flatnonzero(bad)[0]].tolist()}")
+    return q / norms[:, None]
 
 
 def quaternion(q_xyzw) -> fm.Quaternion:

@@ -321,7 +321,7 @@ class StageRecorder:
                                                     in frames])
             self._mcap.write(channel, time_ns, message.encode())
         for parent, child, translations, quaternions in frames:
-            unit = np.array([fx.unit_quaternion(q) for q in quaternions]).reshape(-1, 4)
+            unit = fx.unit_quaternions(quaternions)
             self.rerun.send_columns(_checked_topic(f"{TF_TOPIC}/{child}"), indexes=index,
                                     columns=rr.Transform3D.columns(
                                         translation=translations, quaternion=unit,
@@ -336,7 +336,7 @@ class StageRecorder:
         ns, index = self._time_column(t)
         translations = np.asarray(translations, dtype=float).reshape(-1, 3)
         quaternions = np.asarray(q_xyzw, dtype=float).reshape(-1, 4)
-        unit = np.array([fx.unit_quaternion(q) for q in quaternions]).reshape(-1, 4)
+        unit = fx.unit_quaternions(quaternions)
         if translations.shape[0] != ns.size or unit.shape[0] != ns.size:
             raise ValueError(f"{topic}: need {ns.size} translations and quaternions")
         channel = self._mcap.protobuf_channel(topic, fm.PoseInFrame)
