@@ -45,10 +45,10 @@ def test_interrupted_run_keeps_finished_stages_and_resumes(tmp_path, signal_numb
     stderr = log.read_text()
 
     if signal_number == signal.SIGINT:
-        assert process.returncode == 130
+        assert process.returncode == 130, stderr
         assert "interrupted: finished stages are kept" in stderr
     else:
-        assert process.returncode == -signal.SIGKILL
+        assert process.returncode == -signal.SIGKILL, stderr
     learn = read_record(run_dir / "learn")
     assert learn.outputs_intact(run_dir / "learn", DigestMemo())
     assert not (run_dir / "adapt" / RECORD_NAME).exists()

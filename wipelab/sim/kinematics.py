@@ -91,7 +91,11 @@ def rotation_from_quaternion_xyzw(q) -> np.ndarray:
 def rotation_error(current: np.ndarray, target: np.ndarray) -> np.ndarray:
     """Axis-angle vector (3,) in the root frame that rotates ``current`` onto ``target``
     (both (3, 3))."""
-    delta = target @ current.T
+    delta = np.empty((3, 3))                                   # target current^T
+    for i in range(3):
+        for j in range(3):
+            delta[i, j] = target[i, 0] * current[j, 0] + target[i, 1] * current[j, 1] \
+                + target[i, 2] * current[j, 2]
     cosine = min(max((delta[0, 0] + delta[1, 1] + delta[2, 2] - 1.0) / 2.0, -1.0), 1.0)
     axis = np.array([delta[2, 1] - delta[1, 2], delta[0, 2] - delta[2, 0],
                      delta[1, 0] - delta[0, 1]])
