@@ -17,8 +17,9 @@ beside two baselines; simulation speed.
 4. Speed: simulated seconds per wall-clock second (and per CPU second of the process, which
    the other jobs of a shared machine do not inflate) of the control loop alone (headless, no
    logging; median of three runs) and of each stage with its MCAP/Rerun logging, run in this
-   process; and of one whole ``wipelab adapt`` command (Python start-up, imports and loading
-   the compiled kernels from numba's cache included; CPU of the child process). The loop runs
+   process; and of one whole ``wipelab adapt`` and one whole ``wipelab replay`` command
+   (Python start-up, imports and loading the compiled kernels from numba's cache included,
+   about 1.7 s whatever the length of the run; CPU of the child process). The loop runs
    first, so the stage rows do not include the one-time kernel loading (the first stage still
    includes Rerun's start-up). The load average is printed with it.
 
@@ -223,6 +224,12 @@ def main() -> None:
     sim = json.loads((out / "metrics.json").read_text())["sim_time_s"]
     speed_rows.append(speed_row(f"wipelab adapt flat (whole command, {os.cpu_count()} CPUs)",
                                 sim, wall, cpu))
+    replayed = work / "replay_cli"
+    wall, cpu = wipelab("replay", str(out / "adapted_model.json"), "-o", str(replayed),
+                        "--surface", "flat", "-q")
+    sim = json.loads((replayed / "metrics.json").read_text())["sim_time_s"]
+    speed_rows.append(speed_row(f"wipelab replay flat 1x 2x 3x (whole command, "
+                                f"{os.cpu_count()} CPUs)", sim, wall, cpu))
     print("\nSpeed (simulated s per wall-clock s [>= 10, aim 50]; per CPU s of the process "
           "that ran it)")
     print(table(["run", "sim s", "wall s", "sim/wall", "sim/CPU", "load avg"], speed_rows))
