@@ -6,7 +6,8 @@ import pytest
 from wipelab.vision.calibration import load_calibration
 from wipelab.vision.colour_model import ColourSource
 from wipelab.vision.projection import invert_transform, transform_points
-from wipelab.vision.tracker import SpongeTracker, TrackerParams
+from wipelab.vision.tracker import SpongeTracker, TrackerParams, _View
+from wipelab.vision.undistortion import pinhole
 from wipelab.vision.video_io import StereoVideoReader
 
 
@@ -73,3 +74,19 @@ def test_colour_learnt_from_a_region_of_the_first_frame(short_demo, short_truth)
     error = np.linalg.norm(poses[valid, :3] - centre[valid], axis=1)
     assert valid[visible == 1].mean() > 0.9
     assert np.median(error) < 0.004
+
+
+def test_a_window_holds_the_projected_points_with_its_margin():
+    K = np.array([[530.0, 0.0, 320.0], [0.0, 530.0, 240.0], [0.0, 0.0, 1.0]])
+    view = _View(K, np.zeros(5), np.eye(4), (640, 480))
+    width, height = view.undistorter.size
+    points = np.array([[0.01, -0.02, 0.6], [-0.05, 0.03, 0.7], [0.04, 0.05, 0.5]])
+    pixels = pinhole(points, view.K)
+    assert view.window_around(points, 16) == (
+        int(np.floor(pixels[:, 0].min())) - 16, int(np.floor(pixels[:, 1].min())) - 16,
+        int(np.ceil(pixels[:, 0].max())) + 16, int(np.ceil(pixels[:, 1].max())) + 16)
+    # clipped to the canvas, and the whole canvas once a point lies behind the camera
+    assert view.window_around(np.array([[-1.0, -1.0, 0.5], [1.0, 1.0, 0.5]]), 16) == (
+        0, 0, width, height)
+    assert view.window_around(np.vstack([points, [[0.0, 0.0, -0.1]]]), 16) == (
+        0, 0, width, height)

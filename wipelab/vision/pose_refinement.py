@@ -5,6 +5,10 @@ silhouette contrast of both cameras, :mod:`wipelab.vision.sponge_likelihood`) is
 the pose because it reads blurred images with bilinear interpolation; its gradient and
 Hessian come from image derivatives chained with the projection's Jacobian, so one Newton
 step costs a handful of image look-ups.
+
+These numpy functions are the reference; the tracker runs the same loop compiled
+(:mod:`wipelab.vision._refinement_kernel`, through
+:meth:`wipelab.vision.sponge_likelihood.SilhouetteContrast.refine`).
 """
 
 from __future__ import annotations

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wipelab.vision._likelihood_kernel import contrast_derivatives, score_poses
+from wipelab.vision._refinement_kernel import refine_contrast
 from wipelab.vision.sampling import sample_bilinear
 from wipelab.vision.undistortion import pinhole
 from wipelab.vision.sponge_box import EDGE_FACES, EDGES, FACE_NORMALS, SpongeBox
@@ -109,8 +110,8 @@ def facing_camera(R_track_sponge: np.ndarray, centre: np.ndarray, eye: np.ndarra
     edges : ndarray of bool, shape (12,)
     """
     eye_sponge = R_track_sponge.T @ (eye - centre)
-    face_centres = FACE_NORMALS * box.half_extents
-    faces = np.einsum("fi,fi->f", FACE_NORMALS, eye_sponge - face_centres) > 0
+    # the eye lies outside face f's plane: n_f . eye > n_f . (n_f half) = half along n_f
+    faces = FACE_NORMALS @ eye_sponge > np.abs(FACE_NORMALS) @ box.half_extents
     edges = faces[EDGE_FACES[:, 0]] != faces[EDGE_FACES[:, 1]]
     return faces, edges
 
@@ -295,6 +296,11 @@ class SilhouetteContrast:
 
     def __init__(self, views: list[tuple[ViewSamples, ViewImage]]):
         self.views = views
+        # the cameras as the compiled Newton loop takes them (see _refinement_kernel)
+        self._kernel_views = tuple(
+            (s.MA, s.MB, s.MC, s.weights, s.is_face, image.R_cam_track, image.t_cam_track,
+             image.K, (float(image.origin[0]), float(image.origin[1])), image.probability)
+            for s, image in views)
 
     def __call__(self, poses: np.ndarray) -> np.ndarray:
         """Summed contrast of poses (n, 4), shape (n,)."""
@@ -319,3 +325,20 @@ class SilhouetteContrast:
             gradient += g
             hessian += h
         return value, gradient, hessian
+
+    def refine(self, start: np.ndarray, scale: np.ndarray, iterations: int = 6,
+               max_step: float = 4.0, tolerance: float = 0.1) -> tuple[np.ndarray, float]:
+        """Damped Newton ascent of the summed contrast from ``start`` (compiled; the same
+        steps as :func:`wipelab.vision.pose_refinement.refine_pose` with
+        :meth:`derivatives` and this object as the score, which see for the parameters).
+
+        Returns
+        -------
+        pose : ndarray, shape (4,)
+        value : float
+        """
+        pose, value = refine_contrast(self._kernel_views,
+                                      np.ascontiguousarray(start, dtype=np.float64),
+                                      np.ascontiguousarray(scale, dtype=np.float64),
+                                      int(iterations), float(max_step), float(tolerance))
+        return pose, float(value)

@@ -26,6 +26,8 @@ same point as synth's truth.csv.
 
 from __future__ import annotations
 
+import math
+import statistics
 from collections import deque
 from dataclasses import dataclass, field
 
@@ -39,15 +41,14 @@ from wipelab.vision.colour_model import (ColourModel, ColourSource, LinearColour
 from wipelab.vision.particle_filter import (align_yaw, normalised_weights,
                                             systematic_resample, weighted_pose_mean,
                                             wrap_half_turn)
-from wipelab.vision.pose_refinement import refine_pose
 from wipelab.vision.projection import invert_transform, transform_points
-from wipelab.vision.sponge_box import SpongeBox, yaw_rotation
+from wipelab.vision.sponge_box import CORNER_SIGNS, SpongeBox, yaw_rotation
 from wipelab.vision.sponge_likelihood import (SilhouetteContrast, SpongeTemplate, ViewImage,
                                               ViewSamples, facing_camera, score_view,
                                               view_samples)
 from wipelab.vision.stereo_geometry import (closest_point_of_rays, reprojection_errors,
                                              triangulate_pixels)
-from wipelab.vision.undistortion import Undistorter, pinhole
+from wipelab.vision.undistortion import Undistorter
 
 
 @dataclass(frozen=True)
@@ -161,14 +162,30 @@ class _View:
                  size: tuple[int, int]):
         self.undistorter = Undistorter(K, D, size)
         self.K = self.undistorter.K  # of the undistorted canvas
+        self.K_inverse = np.linalg.inv(self.K)
         self.R = np.ascontiguousarray(T_cam_track[:3, :3])
         self.t = np.ascontiguousarray(T_cam_track[:3, 3])
-        self.T_cam_track = T_cam_track
         self.eye = invert_transform(T_cam_track)[:3, 3]
 
-    def project(self, points_track: np.ndarray) -> np.ndarray:
-        """Undistorted-canvas pixels (..., 2) of points (..., 3) in the tracking frame."""
-        return pinhole(transform_points(self.T_cam_track, points_track), self.K)
+    def window_around(self, points_track: np.ndarray, margin: int) -> tuple[int, int, int, int]:
+        """Pixel bounds (x0, y0, x1, y1) of the undistorted canvas that hold the projections
+        of points (n, 3) with ``margin`` pixels around them (pinhole projection, as
+        :func:`~wipelab.vision.undistortion.pinhole`); the whole canvas if a point lies behind
+        the camera."""
+        width, height = self.undistorter.size
+        camera = points_track @ self.R.T + self.t
+        z = camera[:, 2]
+        if not np.all(z > 1e-6):
+            return 0, 0, width, height
+        x, y = camera[:, 0] / z, camera[:, 1] / z
+        K = self.K
+        u = K[0, 0] * x + K[0, 1] * y + K[0, 2]
+        v = K[1, 1] * y + K[1, 2]
+        x0 = min(max(math.floor(u.min()) - margin, 0), width - 1)
+        y0 = min(max(math.floor(v.min()) - margin, 0), height - 1)
+        x1 = min(max(math.ceil(u.max()) + margin, x0 + 1), width)
+        y1 = min(max(math.ceil(v.max()) + margin, y0 + 1), height)
+        return x0, y0, x1, y1
 
 
 @dataclass
@@ -371,19 +388,10 @@ class SpongeTracker:
         half = p.sponge.half_extents
         grow = np.array([np.hypot(half[0], half[1]), np.hypot(half[0], half[1]), half[2]])
         lo, hi = table.min(axis=0) - grow, table.max(axis=0) + grow
-        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                            for z in (lo[2], hi[2])]) @ self.R_track_table.T
+        corners = np.where(CORNER_SIGNS > 0, hi, lo) @ self.R_track_table.T
         windows = []
         for view, frame in zip(self.views, frames):
-            pixels = view.project(corners)
-            width, height = view.undistorter.size
-            if np.all(np.isfinite(pixels)):
-                x0, y0 = np.floor(pixels.min(axis=0)).astype(int) - p.window_margin
-                x1, y1 = np.ceil(pixels.max(axis=0)).astype(int) + p.window_margin
-                x0, y0 = int(np.clip(x0, 0, width - 1)), int(np.clip(y0, 0, height - 1))
-                x1, y1 = int(np.clip(x1, x0 + 1, width)), int(np.clip(y1, y0 + 1, height))
-            else:
-                x0, y0, x1, y1 = 0, 0, width, height
+            x0, y0, x1, y1 = view.window_around(corners, p.window_margin)
             crop = view.undistorter.window(frame, x0, y0, x1, y1)
             feature = self.feature.apply(crop)
             if p.blur_sigma > 0:
@@ -403,7 +411,7 @@ class SpongeTracker:
             if m00 < self.params.min_blob_area:
                 return None
             centre = np.array([m10, m01]) / m00 + window.probability.origin
-            rays.append((view.eye, view.R.T @ np.linalg.solve(view.K, np.append(centre, 1.0))))
+            rays.append((view.eye, view.R.T @ (view.K_inverse @ np.append(centre, 1.0))))
         return closest_point_of_rays(*rays[0], *rays[1])
 
     def _score(self, poses: np.ndarray, windows: list[_Window]) -> np.ndarray:
@@ -437,7 +445,7 @@ class SpongeTracker:
                                       weights[near_best] / weights[near_best].sum())
         pose = self._refine(estimate, windows)
         contrast, coverage = self._quality(pose, windows)
-        typical = float(np.median(self.recent_contrast)) if self.recent_contrast else 0.0
+        typical = statistics.median(self.recent_contrast) if self.recent_contrast else 0.0
         if contrast.sum() < p.retry_below * typical:
             # a weak fit: the outline may have locked onto a hand's edge (a box too small
             # and too far, or too big and too near); try again from further along the line
@@ -475,8 +483,8 @@ class SpongeTracker:
         contrast = SilhouetteContrast(list(zip(
             self._samples(self.fine, estimate, p.refine_offsets),
             [window.feature for window in windows])))
-        pose, _ = refine_pose(contrast.derivatives, contrast, estimate,
-                              np.array(p.refine_steps), iterations=p.refine_iterations)
+        pose, _ = contrast.refine(estimate, np.array(p.refine_steps),
+                                  iterations=p.refine_iterations)
         pose[3] = wrap_half_turn(pose[3])
         return pose
 
