@@ -32,3 +32,22 @@ def test_console_script_runs():
     completed = subprocess.run([sys.executable, "-m", "wipelab", "--version"],
                                capture_output=True, text=True, check=True)
     assert completed.stdout.strip() == f"wipelab, version {wipelab.__version__}"
+
+
+def test_a_ctrl_c_inside_compiled_code_counts_as_an_interrupt():
+    """A SIGINT handled during a numba call surfaces as a SystemError caused by it."""
+    from wipelab.errors import InputError, from_user_interrupt
+
+    def interrupted_in_compiled_code():
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as interrupt:
+            raise SystemError("CPUDispatcher(...) returned a result with an exception set") \
+                from interrupt
+
+    with pytest.raises(SystemError) as caught:
+        interrupted_in_compiled_code()
+    assert from_user_interrupt(caught.value)
+    assert from_user_interrupt(KeyboardInterrupt())
+    assert not from_user_interrupt(SystemError("a real internal error"))
+    assert not from_user_interrupt(InputError("x.csv: bad"))

@@ -13,7 +13,7 @@ import sys
 import click
 
 import wipelab
-from wipelab.errors import InputError
+from wipelab.errors import InputError, from_user_interrupt
 
 
 #: command name -> module that defines it (imported on first use, so that ``wipelab --version``
@@ -52,6 +52,10 @@ class _WipelabGroup(click.Group):
         except InputError as error:
             click.echo(f"error: {error}", err=True)
             ctx.exit(2)
+        except SystemError as error:
+            if from_user_interrupt(error):
+                raise KeyboardInterrupt from None
+            raise
 
 
 @click.group(cls=_WipelabGroup, context_settings={"help_option_names": ["-h", "--help"]})

@@ -12,7 +12,7 @@ from typing import Any
 
 import click
 
-from wipelab.errors import InputError
+from wipelab.errors import InputError, from_user_interrupt
 from wipelab.pipeline.spec import StageSpec, file_parameter
 
 
@@ -102,6 +102,10 @@ def run_command(command: click.Command, argv: Sequence[str], stage_name: str,
         raise InputError(f"stage {stage_name}: {error}") from None
     except click.exceptions.Abort:
         raise KeyboardInterrupt from None
+    except SystemError as error:
+        if from_user_interrupt(error):
+            raise KeyboardInterrupt from None
+        raise
     except click.ClickException as error:
         raise InputError(f"{source}: stage {stage_name}: {error.format_message()}") from None
     if isinstance(code, int) and code != 0:
