@@ -6,7 +6,6 @@ import os
 
 import pytest
 
-import wipelab
 from wipelab.pipeline.cache import (RECORD_NAME, DigestMemo, StageRecord, code_files_in_use,
                                     package_root, read_record, remove_record, stage_key,
                                     write_record)
