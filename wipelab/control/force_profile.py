@@ -26,6 +26,7 @@ from numba import njit
 
 from wipelab.learning import kernel_centres, limit_cycle
 from wipelab.learning.derivatives import savgol_centre_coefficients, window_for
+from wipelab.numba_cache import forget_stale_kernels
 
 #: Phases at which learned waveforms are compared (rad).
 COMPARISON_PHASES = np.linspace(0.0, 2.0 * math.pi, 128, endpoint=False)
@@ -210,3 +211,6 @@ class ConvergenceMonitor:
         recent = self.changes_[-p.stable_periods:]
         return (self.periods_ >= p.min_periods and len(recent) == p.stable_periods
                 and all(c < p.tolerance for c in recent))
+
+
+forget_stale_kernels(__name__)

@@ -7,6 +7,8 @@ import math
 import numpy as np
 from numba import njit
 
+from wipelab.numba_cache import forget_stale_kernels
+
 
 @njit(cache=True)
 def forcing(phase, weights, width, centres, out):
@@ -66,3 +68,6 @@ def rollout(y, s, goal, amplitude, weights, width, centres, alpha_s, beta_s, sta
         dmp_step(y, s, goal, amplitude, weights, width, centres, alpha_s, beta_s,
                  start_phase + omega * dt * (k - 1), omega, dt, max_phase_step, f0, f_mid, f1)
         out[k] = y
+
+
+forget_stale_kernels(__name__)

@@ -8,9 +8,8 @@ dip search, the series fit at the hand-over, the pool's locked state) are plain-
 functions of their own modules, compiled here as they are. Fused into one loop over samples,
 a step costs a few microseconds instead of ~200 us.
 
-Numba's on-disk cache (``cache=True``) is keyed on this file alone: after editing a module
-whose functions are compiled into the loop (period_detector, harmonic, afo, oscillators,
-_dmp_kernel), delete ``wipelab/learning/__pycache__/*.nb[ic]``, or a stale loop runs.
+Numba's on-disk cache (``cache=True``) is refreshed when this file or any wipelab module it
+uses changes (:mod:`wipelab.numba_cache`).
 """
 
 from __future__ import annotations
@@ -31,6 +30,7 @@ from wipelab.learning.online import OnlineParameters, anchor_capacity, recent_ca
 from wipelab.learning.oscillators import R_FADE, REFERENCE_OMEGA, nearest_turn, substep_count
 from wipelab.learning.period_detector import (DetectorLayout, add_block, compared_pairs,
                                               first_period_lag, stable_lag)
+from wipelab.numba_cache import forget_stale_kernels
 
 AFS, AFO = 0, 1
 
@@ -595,3 +595,6 @@ class FastOnlineLearner:
                        self.moving, self.centres, out_y, out_phase, out_fundamental,
                        out_oscillators, out_hand_overs, snapshots)
         return list(snapshots[:written])
+
+
+forget_stale_kernels(__name__)

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from wipelab.numba_cache import forget_stale_kernels
 from wipelab.sim.kinematics import (KinematicChain, chain_forward, chain_jacobian,
                                     rotation_error)
 
@@ -252,3 +253,6 @@ def ik_solve(before, axes, prismatic, tail, q, position, use_rotation, rotation,
         if error < tolerance:
             break
     return q, error
+
+
+forget_stale_kernels(__name__)

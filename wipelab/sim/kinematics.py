@@ -14,6 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from wipelab.numba_cache import forget_stale_kernels
+
 
 def rotation_from_rpy(rpy) -> np.ndarray:
     """URDF roll-pitch-yaw (fixed axes x, y, z; rad) -> rotation matrix (3, 3)."""
@@ -334,3 +336,6 @@ def chain_jacobian(before, axes, prismatic, tail, q, jac) -> np.ndarray:
             for r in range(3):
                 jac[3 + r, i] = a[r]
     return pose
+
+
+forget_stale_kernels(__name__)

@@ -8,7 +8,8 @@ rounds coordinates to 1/32 pixel; these kernels interpolate at the exact coordin
 outside the image, as ``cv2.BORDER_CONSTANT``). Fused per pose and sample, a camera's
 score costs a few microseconds per pose instead of the numpy path's temporaries and calls.
 
-Numba's on-disk cache (``cache=True``) is keyed on this file alone.
+Numba's on-disk cache (``cache=True``) is refreshed when this file or any wipelab module it
+uses changes (:mod:`wipelab.numba_cache`).
 """
 
 from __future__ import annotations
@@ -17,6 +18,8 @@ import math
 
 import numpy as np
 from numba import njit
+
+from wipelab.numba_cache import forget_stale_kernels
 
 #: Camera points nearer than this (metres along the optical axis) are not projected.
 MIN_DEPTH = 1e-6
@@ -201,3 +204,6 @@ def contrast_derivatives(pose, MA, MB, MC, weights, R, t, K, origin, image):
         for r in range(q):
             hessian[q, r] = hessian[r, q]
     return value, gradient, hessian
+
+
+forget_stale_kernels(__name__)

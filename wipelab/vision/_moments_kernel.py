@@ -3,12 +3,15 @@
 Same numbers as ``cv2.moments(binary, binaryImage=True)`` of the thresholded image (tests
 hold the two to each other) without building the binary image: one pass over the pixels.
 
-Numba's on-disk cache (``cache=True``) is keyed on this file alone.
+Numba's on-disk cache (``cache=True``) is refreshed when this file or any wipelab module it
+uses changes (:mod:`wipelab.numba_cache`).
 """
 
 from __future__ import annotations
 
 from numba import njit
+
+from wipelab.numba_cache import forget_stale_kernels
 
 
 @njit(cache=True)
@@ -27,3 +30,6 @@ def threshold_moments(image, threshold):
         m10 += columns
         m01 += count * y
     return m00, m10, m01
+
+
+forget_stale_kernels(__name__)

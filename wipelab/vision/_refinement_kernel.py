@@ -12,8 +12,8 @@ A camera is passed as the tuple ``(MA, MB, MC, weights, is_face, R, t, K, origin
 of :func:`wipelab.vision._likelihood_kernel.score_poses`' arguments; ``views`` is a tuple
 of them.
 
-Numba's on-disk cache (``cache=True``) is keyed on this file alone: after changing
-:mod:`wipelab.vision._likelihood_kernel`, delete ``wipelab/vision/__pycache__/*.nbi *.nbc``.
+Numba's on-disk cache (``cache=True``) is refreshed when this file or any wipelab module it
+uses changes (:mod:`wipelab.numba_cache`).
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from wipelab.numba_cache import forget_stale_kernels
 from wipelab.vision._likelihood_kernel import contrast_derivatives, score_poses
 
 #: Step multiples tried along the Newton step, then along the scaled gradient.
@@ -135,3 +136,5 @@ def refine_contrast(views, start, scale, iterations, max_step, tolerance):
             break
     return pose, value
 
+
+forget_stale_kernels(__name__)
