@@ -67,10 +67,11 @@ def check_summary(out_dir, result):
     broken = rows.pop(BROKEN)
     assert broken["status"] == "failed"
     assert f"{BROKEN}/left.mp4: cannot be decoded" in broken["error"]
-    assert broken["learn.frequency_hz"] == ""
+    assert broken["learn.frequency_hz"] == "" and broken["demo.frequency_hz"] == ""
     for name, row in rows.items():
         assert row["status"] == "ok" and row["error"] == "" and row["stages_run"] == "3"
         truth_hz = float(name.split("_")[1].removesuffix("hz"))
+        assert float(row["demo.frequency_hz"]) == truth_hz
         assert abs(float(row["learn.frequency_hz"]) - truth_hz) < 0.05 * truth_hz, (name, row)
         run_dir = out_dir / "runs" / name
         assert read_record(run_dir / "rollout") is not None
@@ -149,3 +150,17 @@ def test_printed_summary_has_the_chosen_metrics_and_blank_cells_where_missing():
     assert lines[1].split() == ["a", "ok", "1.2", "2", "0", "1"]
     assert lines[2].split()[:5] == ["b", "failed", "0.5", "0", "0"]
     assert lines[2].endswith("b/left.mp4: cannot be decoded")
+
+
+def test_demo_metrics_name_a_synthetic_demos_frequency_and_nothing_else(tmp_path):
+    from wipelab.pipeline.metrics import demo_metrics
+
+    synthetic, recorded, broken = (tmp_path / name for name in ("synthetic", "recorded", "broken"))
+    for folder in (synthetic, recorded, broken):
+        folder.mkdir()
+    (synthetic / "demo.toml").write_text("fps = 30\n[synth]\nfrequency_hz = 0.8\n")
+    (recorded / "demo.toml").write_text('fps = 30\nsponge_colour = "yellow"\n')
+    (broken / "demo.toml").write_text("[synth\nfrequency_hz = ")
+    assert demo_metrics(synthetic) == {"demo.frequency_hz": 0.8}
+    assert demo_metrics(recorded) == {} and demo_metrics(broken) == {}
+    assert demo_metrics(tmp_path / "missing") == {}

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from wipelab.errors import InputError
-from wipelab.pipeline.metrics import is_key_metric, run_metrics
+from wipelab.pipeline.metrics import demo_metrics, is_key_metric, run_metrics
 from wipelab.pipeline.spec import Pipeline
 
 #: Files that mark a directory as a demonstration (DESIGN.md, "Demo directory").
@@ -52,6 +52,7 @@ class DemoResult:
         Wall time of the demo's pipeline run.
     stages_run, stages_reused : int
     metrics : dict[str, float]
+        :func:`~wipelab.pipeline.metrics.demo_metrics` of the demo and
         :func:`~wipelab.pipeline.metrics.run_metrics` of its run directory.
     """
 
@@ -144,7 +145,7 @@ def process_demo(task: DemoTask) -> DemoResult:
     return DemoResult(task.demo, ok=True, seconds=time.perf_counter() - start,
                       stages_run=sum(not o.reused for o in outcomes),
                       stages_reused=sum(o.reused for o in outcomes),
-                      metrics=run_metrics(task.run_dir))
+                      metrics=demo_metrics(task.demo_dir) | run_metrics(task.run_dir))
 
 
 def run_dataset(tasks: Sequence[DemoTask], jobs: int = 1, scheduler: str | None = None,

@@ -1,4 +1,5 @@
-"""The numbers a run produced: every stage's ``metrics.json`` and the learned frequency.
+"""The numbers a run produced: every stage's ``metrics.json`` and the learned frequency; and
+the truth a synthetic demo was rendered with.
 
 Used by the data set summary table and the report. Keys are ``<stage>.<name>``, nested
 objects are joined with dots (``adapt.force.rms_error_n``); only finite numbers are kept.
@@ -9,6 +10,7 @@ from __future__ import annotations
 import fnmatch
 import json
 import math
+import tomllib
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -34,6 +36,24 @@ KEY_METRICS = ("*.frequency_hz", "*.profile_hold.rms_height_error_m",
 def is_key_metric(name: str, patterns: Sequence[str] = KEY_METRICS) -> bool:
     """True when ``name`` matches one of ``patterns`` (shell-style globs)."""
     return any(fnmatch.fnmatchcase(name, pattern) for pattern in patterns)
+
+
+def synthetic_frequency_hz(demo_dir: str | Path) -> float | None:
+    """The wiping frequency a synthetic demo was rendered at (``[synth] frequency_hz`` of its
+    demo.toml), or None for a recorded demo (or an unreadable demo.toml)."""
+    try:
+        synth = tomllib.loads((Path(demo_dir) / "demo.toml").read_text()).get("synth", {})
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return None
+    value = synth.get("frequency_hz") if isinstance(synth, dict) else None
+    return float(value) if isinstance(value, (int, float)) else None
+
+
+def demo_metrics(demo_dir: str | Path) -> dict[str, float]:
+    """``{"demo.frequency_hz": f}`` for a synthetic demo (beside the learned one in the data
+    set summary), ``{}`` for a recorded one."""
+    frequency_hz = synthetic_frequency_hz(demo_dir)
+    return {} if frequency_hz is None else {"demo.frequency_hz": frequency_hz}
 
 
 def run_metrics(run_dir: str | Path) -> dict[str, float]:

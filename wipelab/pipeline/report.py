@@ -167,15 +167,13 @@ def _observed(mcap: Path, t: np.ndarray) -> np.ndarray:
 
 def _demo_frequency_hz(run_dir: Path) -> float | None:
     """The true frequency of a synthetic demo a track stage of this run read, if any."""
-    import tomllib
+    from wipelab.pipeline.metrics import synthetic_frequency_hz
 
     for stage_dir, record in stage_records(run_dir):
         if record.command == "track" and record.input is not None:
-            demo_toml = (stage_dir.parent / record.input / "demo.toml")
-            if demo_toml.is_file():
-                synth = tomllib.loads(demo_toml.read_text()).get("synth", {})
-                if "frequency_hz" in synth:
-                    return float(synth["frequency_hz"])
+            frequency_hz = synthetic_frequency_hz(stage_dir.parent / record.input)
+            if frequency_hz is not None:
+                return frequency_hz
     return None
 
 
