@@ -90,3 +90,28 @@ def test_a_window_holds_the_projected_points_with_its_margin():
         0, 0, width, height)
     assert view.window_around(np.vstack([points, [[0.0, 0.0, -0.1]]]), 16) == (
         0, 0, width, height)
+
+
+def test_scoring_windows_hold_every_sample_of_every_pose_with_the_margin(short_demo,
+                                                                         short_truth):
+    calibration = load_calibration(short_demo / "calibration.yaml")
+    tracker = SpongeTracker(calibration, ColourSource(name="yellow"), TrackerParams(seed=1))
+    frames = next(iter(StereoVideoReader(short_demo / "left.mp4", short_demo / "right.mp4")))
+    assert tracker._learn_colour(frames)
+    tracker.R_track_table = np.eye(3)  # the calibration has a world frame: z is up
+    _, centre, _ = short_truth
+    rng = np.random.default_rng(3)
+    poses = np.column_stack([centre[0] + rng.normal(size=(50, 3)) * 0.01,
+                             rng.uniform(-1.5, 1.5, 50)])
+    windows = tracker._windows(frames, poses)
+    margin = tracker.params.window_margin
+    offsets = tracker.params.search_offsets + tracker.params.refine_offsets
+    for pose in poses:
+        for samples, window, view in zip(tracker._samples(tracker.coarse, pose, offsets),
+                                         windows, tracker.views):
+            c, s = np.cos(pose[3]), np.sin(pose[3])
+            camera = (view.R @ pose[:3] + view.t) + c * samples.MA + s * samples.MB + samples.MC
+            uv = pinhole(camera, view.K) - window.feature.origin
+            height, width = window.feature.probability.shape
+            assert uv.min() >= margin - 1
+            assert np.all(uv < [width - margin + 1, height - margin + 1])

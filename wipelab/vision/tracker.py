@@ -84,7 +84,8 @@ class TrackerParams:
         Gaussian blur of the colour feature the refinement reads, pixels (smooths the score
         below a pixel).
     window_margin : int
-        Margin around the predicted sponge, pixels, of the window where frames are scored.
+        Margin, pixels, around the predicted sponge boxes (grown by the farthest sample
+        offset) of the window where frames are scored: room for the blur and the refinement.
     min_contrast : float
         Silhouette contrast (back-projection) each camera needs for a valid frame.
     min_coverage : float
@@ -116,7 +117,7 @@ class TrackerParams:
     refine_steps: tuple[float, float, float, float] = (0.001, 0.001, 0.001, 0.015)
     refine_iterations: int = 8
     blur_sigma: float = 0.7
-    window_margin: int = 16
+    window_margin: int = 4
     min_contrast: float = 0.35
     min_coverage: float = 0.30
     retry_below: float = 0.9
@@ -382,13 +383,11 @@ class SpongeTracker:
     def _windows(self, frames, poses: np.ndarray) -> list[_Window]:
         """Score images of each camera inside a window around the boxes of ``poses``."""
         p = self.params
-        # the boxes of all poses fit in a prism along the table axes: the poses' extent
-        # grown by the sponge's half diagonal sideways and its half height up and down
-        table = poses[:, :3] @ self.R_track_table  # positions in table axes
-        half = p.sponge.half_extents
-        grow = np.array([np.hypot(half[0], half[1]), np.hypot(half[0], half[1]), half[2]])
-        lo, hi = table.min(axis=0) - grow, table.max(axis=0) + grow
-        corners = np.where(CORNER_SIGNS > 0, hi, lo) @ self.R_track_table.T
+        # the corners of every pose's box, grown by the farthest sample offset so that the
+        # outside samples lie in the window too
+        half = p.sponge.half_extents + max(p.search_offsets + p.refine_offsets)
+        table = (CORNER_SIGNS * half) @ np.swapaxes(yaw_rotation(poses[:, 3]), 1, 2)
+        corners = (poses[:, None, :3] + table @ self.R_track_table.T).reshape(-1, 3)
         windows = []
         for view, frame in zip(self.views, frames):
             x0, y0, x1, y1 = view.window_around(corners, p.window_margin)
