@@ -17,8 +17,8 @@ import cv2
 import numpy as np
 
 from wipelab.errors import InputError
-from wipelab.vision.projection import (SUPPORTED_DISTORTION_LENGTHS, invert_transform,
-                                       make_transform, project_points, transform_points)
+from wipelab.vision.projection import (SUPPORTED_DISTORTION_LENGTHS, make_transform,
+                                       project_points, transform_points)
 
 REQUIRED_KEYS = ("image_width", "image_height", "K1", "D1", "K2", "D2", "R", "T")
 
@@ -41,11 +41,6 @@ class Camera:
     K: np.ndarray
     D: np.ndarray
     T_cam_ref: np.ndarray
-
-    @property
-    def centre_ref(self) -> np.ndarray:
-        """Optical centre in the reference frame, shape (3,)."""
-        return invert_transform(self.T_cam_ref)[:3, 3]
 
     def project(self, points_ref: np.ndarray) -> np.ndarray:
         """Pixels (..., 2) of points (..., 3) given in the reference frame (with distortion)."""
