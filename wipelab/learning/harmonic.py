@@ -18,6 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba.extending import register_jitable
 
+from wipelab.linalg import solve_positive_definite
+
 #: Most harmonics a fit uses (fewer when they would pass Nyquist).
 MAX_HARMONICS = 8
 
@@ -302,38 +304,10 @@ def _recent_fit(U: np.ndarray, dt: float, omega: float, terms: int):
             design[k, 2 * c] = sin_c
     gram = design.T @ design + LOCK_RIDGE * n * np.eye(columns)
     projection = design.T @ U
-    coefficients = _solve_positive_definite(gram, projection)
+    coefficients = solve_positive_definite(gram, projection)
     return coefficients, (U * U).sum() - (coefficients * projection).sum()
 
 
-@register_jitable
-def _solve_positive_definite(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    """x with matrix x = rhs by Cholesky (matrix (m, m) symmetric positive definite, rhs (m, k)).
-
-    Loops: compiled by numba without its LAPACK bindings (np.linalg.solve alone added 11 s
-    to the kernel's first compilation).
-    """
-    m = matrix.shape[0]
-    lower = np.zeros((m, m))
-    for i in range(m):
-        for j in range(i + 1):
-            total = matrix[i, j]
-            for k in range(j):
-                total -= lower[i, k] * lower[j, k]
-            lower[i, j] = math.sqrt(total) if i == j else total / lower[j, j]
-    x = np.empty(rhs.shape)
-    for column in range(rhs.shape[1]):
-        for i in range(m):                                  # lower y = rhs
-            total = rhs[i, column]
-            for k in range(i):
-                total -= lower[i, k] * x[k, column]
-            x[i, column] = total / lower[i, i]
-        for i in range(m - 1, -1, -1):                      # lower^T x = y
-            total = x[i, column]
-            for k in range(i + 1, m):
-                total -= lower[k, i] * x[k, column]
-            x[i, column] = total / lower[i, i]
-    return x
 
 
 def locked_series(U: np.ndarray, dt: float, omega: float, n_terms: int, reference: int,

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from wipelab.linalg import solve_positive_definite
 from wipelab.numba_cache import forget_stale_kernels
 from wipelab.sim.kinematics import (KinematicChain, chain_forward, chain_jacobian,
                                     rotation_error)
@@ -123,8 +124,9 @@ def _inverse_costs(q, lower, upper, cost, limit_zone) -> np.ndarray:
 def _weighted_solution(rows, weighted, rhs, damping2) -> np.ndarray:
     """W^-1 J^T (J W^-1 J^T + lambda^2 I)^-1 rhs with ``weighted`` = J W^-1 (m, n).
 
-    The m x m system (m <= 6, symmetric positive definite for lambda > 0) is solved by
-    Cholesky in plain loops: at this size a LAPACK/BLAS call costs more than the arithmetic.
+    The m x m system (m <= 6, symmetric positive definite for lambda > 0; its lower triangle
+    is built) is solved by :func:`wipelab.linalg.solve_positive_definite` in plain loops: at
+    this size a LAPACK/BLAS call costs more than the arithmetic.
     """
     m, n = rows.shape
     gram = np.empty((m, m))
@@ -135,24 +137,7 @@ def _weighted_solution(rows, weighted, rhs, damping2) -> np.ndarray:
                 total += weighted[a, j] * rows[b, j]
             gram[a, b] = total
         gram[a, a] += damping2
-    # gram = L L^T, L in the lower triangle; then L y = rhs, L^T x = y
-    for a in range(m):
-        for b in range(a + 1):
-            total = gram[a, b]
-            for k in range(b):
-                total -= gram[a, k] * gram[b, k]
-            gram[a, b] = math.sqrt(total) if a == b else total / gram[b, b]
-    solution = np.empty(m)
-    for a in range(m):
-        total = rhs[a]
-        for k in range(a):
-            total -= gram[a, k] * solution[k]
-        solution[a] = total / gram[a, a]
-    for a in range(m - 1, -1, -1):
-        total = solution[a]
-        for k in range(a + 1, m):
-            total -= gram[k, a] * solution[k]
-        solution[a] = total / gram[a, a]
+    solution = solve_positive_definite(gram, rhs.reshape((m, 1)))[:, 0]
     dq = np.zeros(n)
     for r in range(m):
         for j in range(n):
