@@ -69,7 +69,7 @@ def test_the_moving_object_is_picked_and_the_still_one_remembered_as_static():
         phase = 2 * np.pi * frame / 30.0
         sponge = np.array([0.1 * np.cos(phase), 0.1 + 0.05 * np.sin(phase), 0.8])
         tracks.update(frame, [_candidate(cloth, 0.3), _candidate(sponge, 0.09)])
-        if frame < 20:  # not seen long enough to judge
+        if frame < 14:  # not seen long enough to judge (half a second)
             assert tracks.moving(frame) is None
     moving = tracks.moving(89)
     assert moving is not None and abs(moving.size - 0.09) < 1e-9

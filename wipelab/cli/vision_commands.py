@@ -60,8 +60,9 @@ def synth(out_dir: Path, pattern: str, frequency_hz: float, duration: float, see
               show_default=True, help="Number of particles.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Particle filter seed.")
 @click.option("--sponge-size", default=None, metavar="L,W,H",
-              help="Sponge length, width, height in metres [default: demo.toml's sponge_size, "
-                   "else 0.110,0.075,0.030].")
+              help="Sponge length, width, height in metres, if known: the box refinement then "
+                   "reports the box centre [default: demo.toml's sponge_size, else unknown: the "
+                   "sponge is tracked by its colour region].")
 @click.option("--area-window", default="0,10", show_default=True, metavar="START,END",
               help="Time window (s) in which the demonstration area is measured (paper Fig. 3).")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar, no summary.")

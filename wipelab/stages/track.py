@@ -3,10 +3,13 @@
 Reads a demo directory (DESIGN.md: left.mp4, right.mp4, calibration.yaml, optional
 demo.toml), tracks the sponge with :class:`wipelab.vision.tracker.SpongeTracker` and writes
 
-* ``track.csv``: t, x, y, z (sponge-box centre, metres, world frame, or the left camera's
+* ``track.csv``: t, x, y, z (the sponge's point, metres, world frame, or the left camera's
   optical frame when the calibration has no T_world_left), valid (0 while occluded or lost;
-  positions are then empty), yaw (rad, about the table normal), and the normalised offsets
-  ``x_norm``, ``y_norm`` from the centre of the demonstration area (paper Fig. 3);
+  positions are then empty), quality (how the row was measured: ``box`` — the sponge box
+  fitted, its centre; ``centroid`` — the sponge's colour region in both cameras placed on the
+  table's plane; empty when not valid), yaw (rad, about the table normal; box rows only),
+  and the normalised offsets ``x_norm``, ``y_norm`` from the centre of the demonstration
+  area (paper Fig. 3);
 * ``track.mcap`` / ``track.rrd``: both videos (video references), both camera calibrations,
   /tf of the cameras, the track, the particles, the demonstration area, per-frame quality;
   in Rerun also the particles and the estimate drawn over both images;
@@ -40,7 +43,7 @@ from wipelab.vision.colour_model import NAMED_COLOURS, ColourSource, parse_hsv_r
 from wipelab.vision.demonstration_area import DemonstrationArea, measure_demonstration_area
 from wipelab.vision.projection import invert_transform
 from wipelab.vision.sponge_box import SpongeBox
-from wipelab.vision.tracker import SpongeTracker, TrackerParams
+from wipelab.vision.tracker import QUALITY_BOX, QUALITY_NONE, SpongeTracker, TrackerParams
 from wipelab.vision.video_io import H264Writer, StereoVideoReader
 
 DEFAULT_COLOUR = "yellow"
@@ -65,12 +68,16 @@ class TrackParams:
     seed : int
         Seed of the particle filter.
     sponge_size : tuple of float or None
-        (length, width, height) of the sponge, metres; None: demo.toml's ``sponge_size`` or
-        a kitchen sponge's 0.110 x 0.075 x 0.030.
+        (length, width, height) of the sponge, metres, when known; None: demo.toml's
+        ``sponge_size``, else unknown (the sponge is then tracked by its colour region alone;
+        with a size the box refinement gives its centre).
     area_window : tuple of float
         Time window (start, end), seconds, in which the demonstration area is measured.
     logged_particles : int
         Particles per frame written to the logs.
+    warmup : float
+        Seconds of video read first to find the sponge and measure the table before the
+        tracking pass from the first frame (more when the sponge takes longer to find).
     """
 
     colour: str | None = None
@@ -81,6 +88,7 @@ class TrackParams:
     sponge_size: tuple[float, float, float] | None = None
     area_window: tuple[float, float] = (0.0, 10.0)
     logged_particles: int = 40
+    warmup: float = 6.0
 
 
 @dataclass
@@ -91,27 +99,37 @@ class TrackResult:
     ----------
     t : ndarray, shape (n,)
     poses : ndarray, shape (n, 4)
-        x, y, z (metres) and yaw (rad) in ``frame``; NaN where invalid.
+        x, y, z (metres) and yaw (rad) in ``frame``; NaN where invalid (yaw also in
+        ``centroid`` rows).
     valid : ndarray of bool, shape (n,)
+    quality : ndarray of str, shape (n,)
+        ``box``, ``centroid`` or ``""`` per frame (see the module docstring).
     area : DemonstrationArea
     normalised : ndarray, shape (n, 2)
     frame : str
         ``world`` or ``left_optical``.
-    contrast, coverage : ndarray, shape (n, 2)
-        Per-frame quality in the left and right image.
+    areas : ndarray, shape (n, 2)
+        Pixels of the sponge's colour region in the left and right image (0 where not
+        measured).
     particles : ndarray, shape (n, m, 4)
-        A sample of each frame's particles.
+        A sample of each frame's particles of the box refinement (NaN without it).
+    sponge_size : tuple of float or None
+        (length, width, height) of the sponge box when known, metres.
+    region_size : float
+        Size of the sponge's visible colour region (square root of its area), metres.
     """
 
     t: np.ndarray
     poses: np.ndarray
     valid: np.ndarray
+    quality: np.ndarray
     area: DemonstrationArea
     normalised: np.ndarray
     frame: str
-    contrast: np.ndarray
-    coverage: np.ndarray
+    areas: np.ndarray
     particles: np.ndarray = field(repr=False)
+    sponge_size: tuple[float, float, float] | None = None
+    region_size: float = float("nan")
 
 
 @dataclass(frozen=True)
@@ -175,10 +193,10 @@ def _colour_source(params: TrackParams, metadata: dict, toml_name: str) -> Colou
         raise InputError(f"{option}: {error}") from None
 
 
-def _sponge(params: TrackParams, metadata: dict, toml_name: str) -> SpongeBox:
+def _sponge(params: TrackParams, metadata: dict, toml_name: str) -> SpongeBox | None:
     size = params.sponge_size or metadata.get("sponge_size")
     if size is None:
-        return SpongeBox()
+        return None
     option = "--sponge-size" if params.sponge_size else f"{toml_name}: sponge_size"
     try:
         values = [float(v) for v in size]
@@ -212,14 +230,16 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
                                    sponge=_sponge(params, demo.metadata, toml_name))
     tracker = SpongeTracker(demo.calibration, colour, tracker_params)
     result = run_tracker(tracker, demo.reader, params, quiet)
-    if tracker.model is None:
+    if result is None and not tracker.region.frames_with_candidates:
         raise InputError(f"{colour.option}: this colour never shows in both {demo.left} and "
-                         f"{demo.right}")
+                         f"{demo.right}; give the sponge's colour with --color, --hsv or --roi")
     if result is None:
-        raise InputError(f"{demo.left}, {demo.right}: the sponge ({colour.option}) was never "
-                         "seen by both cameras at once")
+        raise InputError(f"{demo.left}, {demo.right}: nothing of this colour ({colour.option}) "
+                         "moves like a wiping sponge in both cameras; give the sponge's colour "
+                         "with --color, --hsv or --roi")
+    sponge = tracker_params.sponge
     parameters = asdict(params) | {"colour_source": colour.option,
-                                   "sponge": asdict(tracker_params.sponge)}
+                                   "sponge": None if sponge is None else asdict(sponge)}
     inputs = {"left_video": demo.left, "right_video": demo.right,
               "calibration": demo.calibration_path}
     with staged_output(out_dir) as tmp:
@@ -234,19 +254,36 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
 
 def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: TrackParams,
                 quiet: bool = False) -> TrackResult | None:
-    """Run ``tracker`` over every frame pair of ``reader``; None if no frame was valid."""
+    """Run ``tracker`` over every frame pair of ``reader``; None if no frame was valid.
+
+    Two passes: a warm-up over the first ``params.warmup`` seconds (longer until the sponge
+    is found and the plane it moves in is known), then, with what it learnt, the tracking
+    pass from the first frame (so that the first seconds are tracked too).
+    """
     n = reader.frame_count
     poses = np.full((n, 4), np.nan)
     valid = np.zeros(n, bool)
-    contrast, coverage = np.zeros((n, 2)), np.zeros((n, 2))
+    quality = np.full(n, QUALITY_NONE, dtype="<U8")
+    areas = np.zeros((n, 2))
     m = params.logged_particles
     particles = np.full((n, m, 4), np.nan)
+    least = int(round(params.warmup * reader.fps))
+    with tqdm(total=n, desc="track: finding the sponge", unit="frame", disable=quiet,
+              file=sys.stderr, leave=False) as bar:
+        for k, (left, right) in enumerate(reader):
+            tracker.step(left, right)
+            bar.update()
+            if k + 1 >= least and tracker.ready:
+                break
+    if not tracker.identified:
+        return None
+    tracker.restart()
     with tqdm(total=n, desc="track", unit="frame", disable=quiet, file=sys.stderr,
               leave=False) as bar:
         for k, (left, right) in enumerate(reader):
             estimate = tracker.step(left, right)
-            poses[k], valid[k] = estimate.pose, estimate.valid
-            contrast[k], coverage[k] = estimate.contrast, estimate.coverage
+            poses[k], valid[k], quality[k] = estimate.pose, estimate.valid, estimate.quality
+            areas[k] = estimate.areas
             if len(estimate.particles):
                 pick = np.linspace(0, len(estimate.particles) - 1, m).astype(int)
                 particles[k] = estimate.particles[pick]
@@ -256,14 +293,18 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
     t = np.arange(n) / reader.fps
     area = measure_demonstration_area(t, poses[:, :2], valid, params.area_window)
     normalised = np.where(valid[:, None], area.normalise(poses[:, :2]), np.nan)
-    return TrackResult(t, poses, valid, area, normalised, tracker.calibration.track_frame,
-                       contrast, coverage, particles)
+    sponge = tracker.params.sponge
+    return TrackResult(t, poses, valid, quality, area, normalised,
+                       tracker.calibration.track_frame, areas, particles,
+                       None if sponge is None else (sponge.length, sponge.width, sponge.height),
+                       float(tracker.region.size))
 
 
 def _csv_columns(result: TrackResult) -> dict[str, np.ndarray]:
     p = result.poses
     return {"x": p[:, 0], "y": p[:, 1], "z": p[:, 2], "valid": result.valid.astype(int),
-            "yaw": p[:, 3], "x_norm": result.normalised[:, 0], "y_norm": result.normalised[:, 1]}
+            "quality": result.quality, "yaw": p[:, 3], "x_norm": result.normalised[:, 0],
+            "y_norm": result.normalised[:, 1]}
 
 
 def track_blueprint() -> rrb.Blueprint:
@@ -338,8 +379,8 @@ def log_track(rec: StageRecorder, demo: Demo, result: TrackResult, quiet: bool =
     rec.scalars("/track/position", t[valid], result.poses[valid, :3], names=["x", "y", "z"])
     rec.scalars("/track/valid", t, valid.astype(float))
     rec.scalars("/track/normalised", t[valid], result.normalised[valid], names=["x_norm", "y_norm"])
-    rec.scalars("/track/contrast", t, result.contrast, names=["left", "right"])
-    rec.scalars("/track/coverage", t, result.coverage, names=["left", "right"])
+    rec.scalars("/track/region_area_px", t, result.areas, names=["left", "right"])
+    rec.scalars("/track/box_fit", t, (result.quality == QUALITY_BOX).astype(float))
     area = result.area
     rec.json("/track/demonstration_area", 0.0,
              {"lower_left": area.lower_left, "upper_right": area.upper_right,

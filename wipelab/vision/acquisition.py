@@ -225,8 +225,8 @@ class AcquisitionParams:
     ----------
     window : int
         Frames over which motion is judged (1.5 s at 30 fps).
-    min_presence : float
-        Fraction of those frames the object must be seen in.
+    min_presence : int
+        Frames of the window the object must be seen in (half a second at 30 fps).
     min_travel : float
         How far the sponge must move in the window (see :meth:`CandidateTrack.travel`),
         metres.
@@ -242,7 +242,7 @@ class AcquisitionParams:
     """
 
     window: int = 45
-    min_presence: float = 0.6
+    min_presence: int = 15
     min_travel: float = 0.02
     static_travel: float = 0.01
     static_frames: int = 60
@@ -313,7 +313,7 @@ class CandidateTracks:
         best, best_travel = None, p.min_travel
         for track in self.tracks:
             seen = sum(1 for f in track.frames if frame - f < p.window)
-            if seen < p.min_presence * p.window:
+            if seen < p.min_presence:
                 continue
             travel = track.travel(frame, p.window)
             if travel >= best_travel:

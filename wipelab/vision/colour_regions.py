@@ -114,3 +114,19 @@ def region_moments(probability: np.ndarray, inside: np.ndarray, origin: tuple[fl
     u = float(columns @ np.arange(len(columns))) / mass + origin[0]
     v = float(rows @ np.arange(len(rows))) / mass + origin[1]
     return np.array([u, v]), area, mass
+
+
+def principal_axis(probability: np.ndarray, inside: np.ndarray) -> tuple[np.ndarray, float]:
+    """Direction (2,) of a region's longer axis in the image (unit, u/v) and the ratio of
+    its second moments along and across it (1 for a round region)."""
+    weights = np.where(inside, probability, 0.0).astype(np.float64)
+    mass = weights.sum()
+    if mass <= 0.0:
+        return np.array([1.0, 0.0]), 1.0
+    v, u = np.mgrid[:weights.shape[0], :weights.shape[1]]
+    mu, mv = (weights * u).sum() / mass, (weights * v).sum() / mass
+    du, dv = u - mu, v - mv
+    covariance = np.array([[(weights * du * du).sum(), (weights * du * dv).sum()],
+                           [(weights * du * dv).sum(), (weights * dv * dv).sum()]]) / mass
+    values, vectors = np.linalg.eigh(covariance)
+    return vectors[:, 1], float(values[1] / max(values[0], 1e-12))

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -33,7 +33,7 @@ from wipelab.vision.acquisition import (AcquisitionParams, CandidateTrack, Candi
                                         StereoCandidate, stereo_candidates, triangulate_rays)
 from wipelab.vision.calibration import StereoCalibration
 from wipelab.vision.colour_model import ColourModel, ColourSource
-from wipelab.vision.colour_regions import Blob, find_blobs, prior_model, region_moments
+from wipelab.vision.colour_regions import find_blobs, principal_axis, prior_model, region_moments
 from wipelab.vision.projection import invert_transform
 from wipelab.vision.table_plane import Plane, fit_plane, points_on_plane
 from wipelab.vision.table_stereo import TableStereo
@@ -93,6 +93,9 @@ class RegionEstimate:
         Region areas, pixels (0 where none).
     stereo_point : ndarray, shape (3,)
         Triangulated point of the two rays, left optical frame (NaN if not both).
+    direction : ndarray, shape (3,)
+        The left region's longer axis on the plane (unit, left optical frame; NaN when not
+        valid).
     reason : str
         Why a frame is not valid (for logs and tests).
     """
@@ -103,6 +106,7 @@ class RegionEstimate:
     rays: np.ndarray
     areas: np.ndarray
     stereo_point: np.ndarray
+    direction: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
     reason: str = ""
 
 
@@ -180,8 +184,13 @@ class RegionTracker:
         self.history: deque[tuple[int, np.ndarray]] = deque(maxlen=3)
         self.failures = 0
         self.valid_count = 0
+        self.frames_with_candidates = 0  # before identification: frames showing the colour
         self._stereo_points: list[np.ndarray] = []
         self._fitted: Plane | None = None
+        # the sponge's pixels in both cameras when it was identified (window images, 0/255
+        # masks): what colour models are learnt from
+        self.seed_windows: list[np.ndarray] = []
+        self.seed_masks: list[np.ndarray] = []
 
     # ----------------------------------------------------------------- public
     @property
@@ -196,6 +205,13 @@ class RegionTracker:
         self.history.clear()
         self.failures = self.params.coast_frames + 1
         self.candidates.tracks.clear()
+
+    def observe(self, point: np.ndarray) -> None:
+        """Take this frame's sponge point (3,), left optical frame, from elsewhere (the box
+        refinement) instead of measuring it: keeps the prediction going."""
+        self.frame += 1
+        self.history.append((self.frame, np.asarray(point, dtype=np.float64).copy()))
+        self.failures = 0
 
     def step(self, left: np.ndarray, right: np.ndarray) -> RegionEstimate:
         """Process the next synchronised frame pair (BGR uint8)."""
@@ -247,7 +263,9 @@ class RegionTracker:
                                  self.views[0].K, self.views[1].K)
 
     def _follow_candidates(self, frames, model: ColourModel) -> CandidateTrack | None:
-        self.candidates.update(self.frame, self._search_candidates(frames, model))
+        candidates = self._search_candidates(frames, model)
+        self.frames_with_candidates += bool(candidates)
+        self.candidates.update(self.frame, candidates)
         return self.candidates.moving(self.frame)
 
     def _identify(self, frames, track: CandidateTrack) -> None:
@@ -271,6 +289,7 @@ class RegionTracker:
             self.model = ColourModel.fit(windows, masks)
         else:
             self.model = self.prior
+        self.seed_windows, self.seed_masks = windows, masks
         radius = max(0.3, 4.0 * self.size)
         self.table = self.table_stereo.plane_near([frames], point, radius)
 
@@ -317,7 +336,8 @@ class RegionTracker:
         return self.history[-1][1] if self.history else None
 
     def _region(self, view: _View, frame: np.ndarray, point: np.ndarray, slack: float):
-        """The sponge's region near ``point`` in one camera: (ray (3,), area) or None."""
+        """The sponge's region near ``point`` in one camera: (ray (3,), area, ray (3,) of a
+        point 10 pixels along the region's longer axis) or None."""
         radius = self.params.window_size * self.size + slack
         window, origin = self._window(view, frame, point, radius)
         probability = self.model.back_project(window)
@@ -335,7 +355,9 @@ class RegionTracker:
         inside = cv2.dilate(inside, np.ones((3, 3), np.uint8)) > 0
         centroid, _, _ = region_moments(probability, inside, tuple(origin))
         area = float(sum(b.area for b in chosen))
-        return view.rays_of_pixels(centroid[None])[0], area
+        axis, _ = principal_axis(probability, inside)
+        rays = view.rays_of_pixels(np.stack([centroid, centroid + 10.0 * axis]))
+        return rays[0], area, rays[1]
 
     def _measure(self, frames) -> RegionEstimate:
         p = self.params
@@ -343,11 +365,14 @@ class RegionTracker:
         if predicted is None:
             return self._invalid("no prediction")
         rays = np.full((2, 3), np.nan)
+        axis_ray = np.full(3, np.nan)
         areas = np.zeros(2)
         for k, (view, frame) in enumerate(zip(self.views, frames)):
             region = self._region(view, frame, predicted, slack + 0.02)
             if region is not None:
-                rays[k], areas[k] = region
+                rays[k], areas[k], along = region
+                if k == 0:
+                    axis_ray = along
         stereo = np.full(3, np.nan)
         if np.all(np.isfinite(rays)):
             stereo = triangulate_rays(rays[:1], rays[1:], self.calibration.R,
@@ -357,7 +382,18 @@ class RegionTracker:
             return self._fail(rays, areas, stereo, reason)
         point = self._locate(rays, stereo)
         self._accept(frames, point, rays, areas, stereo)
-        return RegionEstimate(point, True, QUALITY_CENTROID, rays, areas, stereo)
+        return RegionEstimate(point, True, QUALITY_CENTROID, rays, areas, stereo,
+                              self._direction(rays[0], axis_ray))
+
+    def _direction(self, ray: np.ndarray, axis_ray: np.ndarray) -> np.ndarray:
+        """Unit direction (3,) on the plane from where ``ray`` meets it to where
+        ``axis_ray`` does (left camera rays)."""
+        plane = self.sponge_plane()
+        if plane is None:
+            return np.full(3, np.nan)
+        ends = plane.intersect(np.zeros((2, 3)), np.stack([ray, axis_ray]))
+        direction = ends[1] - ends[0]
+        return direction / np.linalg.norm(direction)
 
     def sponge_plane(self) -> Plane | None:
         """The plane the tracked point moves in: the table's, at the median height of the
@@ -425,9 +461,9 @@ class RegionTracker:
         if self.failures > self.params.coast_frames:
             self.history.clear()
         return RegionEstimate(np.full(3, np.nan), False, QUALITY_NONE, rays, areas, stereo,
-                              reason)
+                              reason=reason)
 
     def _invalid(self, reason: str) -> RegionEstimate:
         return RegionEstimate(np.full(3, np.nan), False, QUALITY_NONE, np.full((2, 3), np.nan),
-                              np.zeros(2), np.full(3, np.nan), reason)
+                              np.zeros(2), np.full(3, np.nan), reason=reason)
 

@@ -71,6 +71,19 @@ class Plane:
         return Plane(self.normal, self.offset + distance, self.residual, self.count)
 
 
+def table_axes(normal: np.ndarray) -> np.ndarray:
+    """Axes (3, 3) of a table frame in the frame ``normal`` (3,) is given in: columns x, y, z
+    with z the normal and x the frame's x axis projected onto the table (its y axis when x
+    is nearly normal to the table). Yaw angles about the table normal are measured from
+    this x."""
+    normal = np.asarray(normal, dtype=np.float64)
+    x = np.array([1.0, 0.0, 0.0]) - normal[0] * normal
+    if np.linalg.norm(x) < 0.1:
+        x = np.array([0.0, 1.0, 0.0]) - normal[1] * normal
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(normal, x), normal])
+
+
 def fit_plane(points: np.ndarray, towards: np.ndarray, prior_normal: np.ndarray | None = None,
               prior_sigma: float = np.deg2rad(3.0), iterations: int = 10) -> Plane:
     """Robust total-least-squares plane through points.
