@@ -38,9 +38,13 @@ worst 9.7 %); the price is that after a deliberate change of tempo the
 model frequency mixes the two until 40 periods have passed (the history's fundamental follows
 within about three).
 
-:class:`OnlineLearner` is the reference implementation, composed of the numpy classes of this
-package; :func:`learn_online` runs the same algorithm through a numba kernel
-(:mod:`wipelab.learning._online_kernel`) unless asked for the reference.
+:class:`OnlineLearner` is the one implementation: ``step`` (one sample, as a live session
+calls it) and ``process`` (many, in a compiled loop) run the same compiled step
+(:mod:`wipelab.learning.online_kernel`). The model's frequency is per tempo segment
+(:mod:`wipelab.learning.tempo`), and by default the weights are fitted to positions through
+the limit cycle (:mod:`wipelab.learning.position_fit`); the numbers below about eqs. 13-15
+are for ``regression="lwr"``. Issue 11's numbers (held-out demonstrations of
+:mod:`wipelab.learning.demonstrator`) are in ``benchmarks/bench_learn.py``.
 
 All numbers below are from ``benchmarks/bench_learn.py`` (two DOFs with 2nd and 3rd
 harmonics and 2 % noise; 0.3, 0.5, 1, 2, 3 Hz at 30 and 500 Hz; worst of two noise seeds)
