@@ -93,40 +93,39 @@ def find_blobs(probability: np.ndarray, min_area: float, threshold: float = 0.5,
         x1, y1 = min(x + w + 1, labels.shape[1]), min(y + h + 1, labels.shape[0])
         inside = cv2.dilate((labels[y0:y1, x0:x1] == label).astype(np.uint8),
                             np.ones((3, 3), np.uint8)) > 0
-        centroid, _, mass = region_moments(probability[y0:y1, x0:x1], inside, (x0, y0))
+        centroid, _, mass, _, _ = region_moments(probability[y0:y1, x0:x1], inside, (x0, y0))
         blobs.append(Blob(centroid, float(area), mass,
                           bbox=(int(x), int(y), int(x + w), int(y + h)), label=label))
     blobs.sort(key=lambda blob: -blob.area)
     return blobs, labels
 
 
-def region_moments(probability: np.ndarray, inside: np.ndarray, origin: tuple[float, float]
-                   ) -> tuple[np.ndarray, float, float]:
-    """(centroid (2,), area, mass) of the pixels ``inside`` (bool, same shape) of a
-    probability image whose pixel (0, 0) sits at ``origin`` (u, v); the centroid weighs each
-    pixel by its probability, so that soft edges (blur, mixed pixels) count in proportion."""
-    weights = np.where(inside, probability, 0.0).astype(np.float64)
-    mass = float(weights.sum())
-    area = float(np.count_nonzero(inside))
-    if mass <= 0.0:
-        return np.full(2, np.nan), area, mass
-    rows, columns = weights.sum(axis=1), weights.sum(axis=0)
-    u = float(columns @ np.arange(len(columns))) / mass + origin[0]
-    v = float(rows @ np.arange(len(rows))) / mass + origin[1]
-    return np.array([u, v]), area, mass
+def region_moments(probability: np.ndarray, inside: np.ndarray, origin: tuple[float, float],
+                   step: float = 1.0) -> tuple[np.ndarray, float, float, np.ndarray, float]:
+    """Moments of the pixels ``inside`` (bool, same shape) of a probability image whose
+    pixel (i, j) sits at ``origin + step (j, i)``, each weighted by its probability (soft
+    edges of blur and mixed pixels count in proportion).
 
-
-def principal_axis(probability: np.ndarray, inside: np.ndarray) -> tuple[np.ndarray, float]:
-    """Direction (2,) of a region's longer axis in the image (unit, u/v) and the ratio of
-    its second moments along and across it (1 for a round region)."""
-    weights = np.where(inside, probability, 0.0).astype(np.float64)
-    mass = weights.sum()
+    Returns
+    -------
+    centroid : ndarray, shape (2,)
+        (u, v), NaN for an empty region.
+    area : float
+        Pixels inside, in units of the origin's pixels.
+    mass : float
+        Sum of the probabilities inside (in the image's own pixels).
+    axis : ndarray, shape (2,)
+        Unit direction of the region's longer axis.
+    elongation : float
+        Ratio of the second moments along and across that axis (1 for a round region).
+    """
+    weights = np.where(inside, probability, 0.0).astype(np.float32)
+    m = cv2.moments(weights)
+    mass = float(m["m00"])
+    area = float(np.count_nonzero(inside)) * step * step
     if mass <= 0.0:
-        return np.array([1.0, 0.0]), 1.0
-    v, u = np.mgrid[:weights.shape[0], :weights.shape[1]]
-    mu, mv = (weights * u).sum() / mass, (weights * v).sum() / mass
-    du, dv = u - mu, v - mv
-    covariance = np.array([[(weights * du * du).sum(), (weights * du * dv).sum()],
-                           [(weights * du * dv).sum(), (weights * dv * dv).sum()]]) / mass
+        return np.full(2, np.nan), area, mass, np.array([1.0, 0.0]), 1.0
+    centroid = np.array([m["m10"], m["m01"]]) / mass * step + np.asarray(origin, float)
+    covariance = np.array([[m["mu20"], m["mu11"]], [m["mu11"], m["mu02"]]]) / mass
     values, vectors = np.linalg.eigh(covariance)
-    return vectors[:, 1], float(values[1] / max(values[0], 1e-12))
+    return centroid, area, mass, vectors[:, 1], float(values[1] / max(values[0], 1e-12))

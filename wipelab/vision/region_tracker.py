@@ -33,7 +33,7 @@ from wipelab.vision.acquisition import (AcquisitionParams, CandidateTrack, Candi
                                         StereoCandidate, stereo_candidates, triangulate_rays)
 from wipelab.vision.calibration import StereoCalibration
 from wipelab.vision.colour_model import ColourModel, ColourSource
-from wipelab.vision.colour_regions import find_blobs, principal_axis, prior_model, region_moments
+from wipelab.vision.colour_regions import find_blobs, prior_model, region_moments
 from wipelab.vision.projection import invert_transform
 from wipelab.vision.table_plane import Plane, fit_plane, points_on_plane
 from wipelab.vision.table_stereo import TableStereo
@@ -50,6 +50,9 @@ class RegionTrackerParams:
     ----------
     search_width : int
         Width, pixels, images are scaled to for the search (acquisition, after a loss).
+    sponge_pixels : float
+        A sponge that spans more pixels than twice this is measured on every second (third,
+        ...) pixel of the window: enough for sub-pixel centroids, and fast on big images.
     window_size : float
         Half-size of the measurement window in multiples of the sponge's size (plus the
         distance it may move in a frame).
@@ -67,7 +70,8 @@ class RegionTrackerParams:
     """
 
     search_width: int = 320
-    window_size: float = 1.2
+    sponge_pixels: float = 60.0
+    window_size: float = 1.0
     min_area_ratio: float = 0.75
     max_area_ratio: float = 1.4
     max_ray_disagreement: float = 0.12
@@ -308,9 +312,10 @@ class RegionTracker:
         return plausible[0]
 
     # -------------------------------------------------------------- measuring
-    def _window(self, view: _View, frame: np.ndarray, point: np.ndarray, radius: float):
+    def _window(self, view: _View, frame: np.ndarray, point: np.ndarray, radius: float,
+                step: int = 1):
         """Undistorted window (image, origin (2,)) around a left-frame point, ``radius``
-        metres in the object's distance."""
+        metres in the object's distance, sampling every ``step``-th canvas pixel."""
         centre = view.pixel(point)
         half = view.focal * radius / max(view.depth(point), 1e-3)
         width, height = view.undistorter.size
@@ -318,7 +323,8 @@ class RegionTracker:
         y0 = int(min(max(math.floor(centre[1] - half), 0), height - 1))
         x1 = int(min(max(math.ceil(centre[0] + half), x0 + 1), width))
         y1 = int(min(max(math.ceil(centre[1] + half), y0 + 1), height))
-        return view.undistorter.window(frame, x0, y0, x1, y1), np.array([x0, y0], float)
+        return (view.undistorter.window(frame, x0, y0, x1, y1, step),
+                np.array([x0, y0], float))
 
     def _predict(self) -> tuple[np.ndarray, float]:
         """Predicted point (3,) and how far it may be off, metres."""
@@ -336,26 +342,29 @@ class RegionTracker:
         return self.history[-1][1] if self.history else None
 
     def _region(self, view: _View, frame: np.ndarray, point: np.ndarray, slack: float):
-        """The sponge's region near ``point`` in one camera: (ray (3,), area, ray (3,) of a
-        point 10 pixels along the region's longer axis) or None."""
-        radius = self.params.window_size * self.size + slack
-        window, origin = self._window(view, frame, point, radius)
-        probability = self.model.back_project(window)
+        """The sponge's region near ``point`` in one camera: (ray (3,), area in canvas
+        pixels, ray (3,) of a point 10 pixels along the region's longer axis) or None."""
+        p = self.params
         pixels_per_metre = view.focal / max(view.depth(point), 1e-3)
-        min_area = max(4.0, 0.05 * (self.size * pixels_per_metre) ** 2)
-        blobs, labels = find_blobs(probability, min_area=min_area)
+        # a sponge much larger than needed for sub-pixel centroids is read at a coarser step
+        step = max(1, int(self.size * pixels_per_metre / p.sponge_pixels))
+        window, origin = self._window(view, frame, point, p.window_size * self.size + slack,
+                                      step)
+        probability = self.model.back_project(window)
+        scale = pixels_per_metre / step  # window pixels per metre
+        blobs, labels = find_blobs(probability, min_area=max(4.0, 0.05 * (self.size * scale) ** 2))
         if not blobs:
             return None
-        centre = view.pixel(point) - origin
-        reach = (0.8 * self.size + slack) * pixels_per_metre
-        chosen = [b for b in blobs if np.linalg.norm(b.centroid - centre) < reach + b.radius]
+        centre = (view.pixel(point) - origin) / step
+        reach = (0.8 * self.size + slack) * scale
+        chosen = [b.label for b in blobs if np.linalg.norm(b.centroid - centre) < reach + b.radius]
         if not chosen:
             return None
-        inside = np.isin(labels, [b.label for b in chosen]).astype(np.uint8)
-        inside = cv2.dilate(inside, np.ones((3, 3), np.uint8)) > 0
-        centroid, _, _ = region_moments(probability, inside, tuple(origin))
-        area = float(sum(b.area for b in chosen))
-        axis, _ = principal_axis(probability, inside)
+        keep = np.zeros(int(labels.max()) + 1, np.uint8)
+        keep[chosen] = 1
+        inside = cv2.dilate(keep[labels], np.ones((3, 3), np.uint8)) > 0
+        centroid, _, _, axis, _ = region_moments(probability, inside, tuple(origin), step)
+        area = float(sum(b.area for b in blobs if b.label in chosen)) * step * step
         rays = view.rays_of_pixels(np.stack([centroid, centroid + 10.0 * axis]))
         return rays[0], area, rays[1]
 
