@@ -35,6 +35,7 @@ from wipelab.vision.calibration import StereoCalibration
 from wipelab.vision.colour_model import ColourModel, ColourSource
 from wipelab.vision.colour_regions import find_blobs, prior_model, region_moments
 from wipelab.vision.projection import invert_transform
+from wipelab.vision.static_background import StaticBackground
 from wipelab.vision.table_plane import Plane, fit_plane, points_on_plane
 from wipelab.vision.table_stereo import TableStereo
 from wipelab.vision.undistortion import Undistorter
@@ -67,6 +68,8 @@ class RegionTrackerParams:
     acquisition : AcquisitionParams
     colour_refresh : int
         Valid frames between refreshes of the colour model (follows the lighting).
+    background_every : int
+        Frames between updates of the static background (:mod:`.static_background`).
     """
 
     search_width: int = 320
@@ -78,6 +81,7 @@ class RegionTrackerParams:
     coast_frames: int = 6
     acquisition: AcquisitionParams = AcquisitionParams()
     colour_refresh: int = 60
+    background_every: int = 3
 
 
 @dataclass
@@ -170,6 +174,8 @@ class RegionTracker:
         self.views = [_View(calibration.K1, calibration.D1, np.eye(4), size),
                       _View(calibration.K2, calibration.D2, calibration.right.T_cam_ref, size)]
         self.search_scale = min(1.0, params.search_width / max(size))
+        self.backgrounds = [StaticBackground(view.undistorter, self.search_scale)
+                            for view in self.views]
         self.prior = prior_model(colour.hsv_range) if colour.hsv_range is not None else None
         self.model: ColourModel | None = None
         self.candidates = CandidateTracks(params.acquisition)
@@ -341,9 +347,20 @@ class RegionTracker:
     def last_valid(self) -> np.ndarray | None:
         return self.history[-1][1] if self.history else None
 
-    def _region(self, view: _View, frame: np.ndarray, point: np.ndarray, slack: float):
+    def _update_backgrounds(self, frames, keep_out: list) -> None:
+        """Blend the frames into the static backgrounds, except where the sponge's regions
+        are (per camera: (mask, origin, step) or None)."""
+        s = self.search_scale
+        for background, frame, region in zip(self.backgrounds, frames, keep_out):
+            small = cv2.resize(frame, None, fx=s, fy=s, interpolation=cv2.INTER_AREA) \
+                if s < 1.0 else frame
+            background.update(small, s, self.model, [region])
+
+    def _region(self, view: _View, frame: np.ndarray, point: np.ndarray, slack: float,
+                background: StaticBackground | None = None):
         """The sponge's region near ``point`` in one camera: (ray (3,), area in canvas
-        pixels, ray (3,) of a point 10 pixels along the region's longer axis) or None."""
+        pixels, ray (3,) of a point 10 pixels along the region's longer axis, (mask, origin,
+        step) of the region in the window) or None."""
         p = self.params
         pixels_per_metre = view.focal / max(view.depth(point), 1e-3)
         # a sponge much larger than needed for sub-pixel centroids is read at a coarser step
@@ -351,6 +368,10 @@ class RegionTracker:
         window, origin = self._window(view, frame, point, p.window_size * self.size + slack,
                                       step)
         probability = self.model.back_project(window)
+        if background is not None and background.updates:
+            # the sponge's colour where the scene showed it while the sponge was elsewhere,
+            # unchanged: a still thing of its colour (a cloth, a stain), not the sponge
+            probability[background.still_colour(window, origin, step)] = 0.0
         scale = pixels_per_metre / step  # window pixels per metre
         blobs, labels = find_blobs(probability, min_area=max(4.0, 0.05 * (self.size * scale) ** 2))
         if not blobs:
@@ -366,7 +387,7 @@ class RegionTracker:
         centroid, _, _, axis, _ = region_moments(probability, inside, tuple(origin), step)
         area = float(sum(b.area for b in blobs if b.label in chosen)) * step * step
         rays = view.rays_of_pixels(np.stack([centroid, centroid + 10.0 * axis]))
-        return rays[0], area, rays[1]
+        return rays[0], area, rays[1], (inside, origin, step)
 
     def _measure(self, frames) -> RegionEstimate:
         p = self.params
@@ -376,12 +397,14 @@ class RegionTracker:
         rays = np.full((2, 3), np.nan)
         axis_ray = np.full(3, np.nan)
         areas = np.zeros(2)
+        masks = [None, None]
         for k, (view, frame) in enumerate(zip(self.views, frames)):
-            region = self._region(view, frame, predicted, slack + 0.02)
+            region = self._region(view, frame, predicted, slack + 0.02, self.backgrounds[k])
             if region is not None:
-                rays[k], areas[k], along = region
+                rays[k], areas[k], along, masks[k] = region
                 if k == 0:
                     axis_ray = along
+
         stereo = np.full(3, np.nan)
         if np.all(np.isfinite(rays)):
             stereo = triangulate_rays(rays[:1], rays[1:], self.calibration.R,
@@ -391,6 +414,8 @@ class RegionTracker:
             return self._fail(rays, areas, stereo, reason)
         point = self._locate(rays, stereo)
         self._accept(frames, point, rays, areas, stereo)
+        if self.frame % p.background_every == 0:
+            self._update_backgrounds(frames, masks)
         return RegionEstimate(point, True, QUALITY_CENTROID, rays, areas, stereo,
                               self._direction(rays[0], axis_ray))
 
