@@ -58,7 +58,10 @@ class RegionTrackerParams:
         Half-size of the measurement window in multiples of the sponge's size (plus the
         distance it may move in a frame).
     min_area_ratio, max_area_ratio : float
-        A valid region's area relative to its median over the last valid frames.
+        A valid region's area, in square metres at the sponge's distance (so that moving
+        nearer or farther does not change it), relative to its median over the last valid
+        frames: a hand passing in front shrinks it, a thing of the same colour joining it
+        grows it.
     max_ray_disagreement : float
         Largest change, in multiples of the sponge size, of the offset between the two
         cameras' rays on the plane from its running median.
@@ -75,8 +78,8 @@ class RegionTrackerParams:
     search_width: int = 320
     sponge_pixels: float = 60.0
     window_size: float = 1.0
-    min_area_ratio: float = 0.75
-    max_area_ratio: float = 1.4
+    min_area_ratio: float = 0.8
+    max_area_ratio: float = 1.25
     max_ray_disagreement: float = 0.12
     coast_frames: int = 6
     acquisition: AcquisitionParams = AcquisitionParams()
@@ -190,7 +193,7 @@ class RegionTracker:
         self.table: Plane | None = None
         self.plane_heights: deque[float] = deque(maxlen=900)
         self.ray_offsets: deque[np.ndarray] = deque(maxlen=90)
-        self.areas = [deque(maxlen=45), deque(maxlen=45)]
+        self.areas = [deque(maxlen=45), deque(maxlen=45)]  # metric areas of valid frames
         self.history: deque[tuple[int, np.ndarray]] = deque(maxlen=3)
         self.failures = 0
         self.valid_count = 0
@@ -280,6 +283,7 @@ class RegionTracker:
 
     def _identify(self, frames, track: CandidateTrack) -> None:
         """The moving candidate is the sponge: learn its size, colour and the table."""
+        self.candidates.static.pop(track.ident, None)  # it may have rested before it moved
         self.size = track.size
         point = track.last_point
         self.history.append((self.frame - 1, point.copy()))
@@ -409,11 +413,13 @@ class RegionTracker:
         if np.all(np.isfinite(rays)):
             stereo = triangulate_rays(rays[:1], rays[1:], self.calibration.R,
                                       self.calibration.T)[0][0]
-        reason = self._check(rays, areas, stereo, predicted, slack)
+        metric_areas = np.array([area * (view.depth(predicted) / view.focal) ** 2
+                                 for area, view in zip(areas, self.views)])
+        reason = self._check(rays, metric_areas, stereo, predicted, slack)
         if reason:
             return self._fail(rays, areas, stereo, reason)
         point = self._locate(rays, stereo)
-        self._accept(frames, point, rays, areas, stereo)
+        self._accept(frames, point, rays, metric_areas, stereo)
         if self.frame % p.background_every == 0:
             self._update_backgrounds(frames, masks)
         return RegionEstimate(point, True, QUALITY_CENTROID, rays, areas, stereo,
