@@ -218,7 +218,7 @@ def free_arm(event, t: float, sponge_centre, eye_mid, camera_right, person) -> l
                         event.hold_offset])
     elbow = aim + offset * up
     wrist = elbow + FOREARM * s * axis - 0.01 * up
-    shoulder = elbow - 2.2 * UPPER_ARM * s * _unit(axis - 0.1 * up)
+    shoulder = elbow + 5.0 * UPPER_ARM * s * _unit(-axis + 0.35 * sight)  # out of view
     sleeve = person.sleeve_bgr if person.sleeve == "long" else person.skin_bgr
     extra = 0.008 if person.sleeve == "long" else 0.0
     skin = person.skin_bgr

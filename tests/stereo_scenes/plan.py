@@ -379,8 +379,8 @@ def plan_cameras(rng, o: _Overrides, small: bool, motion: Motion, sponge: Sponge
         if k1_fixed:
             k1 = k1_value
         else:
-            k1 = 0.0 if rng.random() < 0.15 else -0.45 * rng.uniform(0.05, 1.0) ** 1.3
-            k1 *= min(1.0, (hfov - 30) / 50)
+            k1 = 0.0 if rng.random() < 0.15 else -0.45 * rng.uniform(0.05, 1.0)
+            k1 *= min(1.0, (hfov - 20) / 45)
         K1, D1 = _intrinsics(rng, width, height, hfov, k1)
         K2 = K1.copy()
         K2[0, 0] *= 1 + rng.uniform(-0.01, 0.01)

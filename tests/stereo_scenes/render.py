@@ -24,7 +24,7 @@ from tests.stereo_scenes.actors import HoldingHand, SpongeModel, free_arm, holdi
 from tests.stereo_scenes.camera import Canvas
 from tests.stereo_scenes.lens import distort
 from tests.stereo_scenes.motion import WipingMotion
-from tests.stereo_scenes.raster import Light, Painter
+from tests.stereo_scenes.raster import NEAR, Light, Painter, clip_capsule
 from tests.stereo_scenes.static_scene import StaticTextures, draw_static
 
 MAX_SUBFRAMES = 6
@@ -101,7 +101,10 @@ class CameraView:
         axes = self.camera.T_world_cam[:3, :2].T
         for group, shadow in ((limbs, True), (state.occluder, False)):
             for limb in group:
-                for p, r in ((limb.p0, limb.r0), (limb.p1, limb.r1)):
+                ends = clip_capsule(self.camera, limb.p0, limb.p1, limb.r0, limb.r1)
+                if ends is None:
+                    continue
+                for p, r in zip(ends[:2], (limb.r0, limb.r1)):
                     ring = p + r * 1.3 * np.vstack([axes, -axes])
                     pts.append(ring)
                     if shadow:
@@ -118,13 +121,19 @@ class CameraView:
         (y0, x0, y1, x1) boxes, or None when they are out of view."""
         pts = np.vstack([self._bounding_points(s) for s in states])
         cam_pts = self.camera.to_camera(pts)
-        cam_pts = cam_pts[cam_pts[:, 2] > 0.02]
-        xy = distort(cam_pts[:, :2] / cam_pts[:, 2:3], self.camera.D)
-        K = self.camera.K
-        uv = xy * [K[0, 0], K[1, 1]] + [K[0, 2], K[1, 2]]
-        x0, y0 = np.floor(uv.min(axis=0)).astype(int) - 3
-        x1, y1 = np.ceil(uv.max(axis=0)).astype(int) + 3
         w, h = self.camera.width, self.camera.height
+        xy = cam_pts[:, :2] / np.maximum(cam_pts[:, 2:3], 1e-3)
+        if np.any(cam_pts[:, 2] < NEAR):
+            x0, y0, x1, y1 = 0, 0, w, h
+        else:
+            # rays outside the image: pulled in to its edge (the lens model folds past it)
+            radius = np.linalg.norm(xy, axis=1, keepdims=True)
+            reach = self.canvas.undistorted_reach
+            xy = xy * np.minimum(1.0, reach / np.maximum(radius, 1e-12))
+            K = self.camera.K
+            uv = distort(xy, self.camera.D) * [K[0, 0], K[1, 1]] + [K[0, 2], K[1, 2]]
+            x0, y0 = np.floor(uv.min(axis=0)).astype(int) - 3
+            x1, y1 = np.ceil(uv.max(axis=0)).astype(int) + 3
         pad = int(np.ceil(3 * self.sigma)) + 1
 
         def clipped(p):
