@@ -125,7 +125,7 @@ class Painter:
         side /= np.linalg.norm(side)
         front = view - np.dot(view, side) * side
         front /= np.linalg.norm(front)
-        bands = 1 if target is not None else int(np.clip(radius_px.max() / 2.5, 1, 9))
+        bands = 1 if target is not None else int(np.clip(radius_px.max() / 2.0, 1, 16))
         edges = np.linspace(-0.97, 0.97, bands + 1)
         corners = np.concatenate([p0 + r0 * edges[:, None] * side, p1 + r1 * edges[:, None] * side])
         corner_px = self.to_pixels(corners)

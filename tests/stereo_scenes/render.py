@@ -27,8 +27,8 @@ from tests.stereo_scenes.motion import WipingMotion
 from tests.stereo_scenes.raster import NEAR, Light, Painter, clip_capsule
 from tests.stereo_scenes.static_scene import StaticTextures, draw_static
 
-MAX_SUBFRAMES = 6
-SUBFRAME_STEP_PX = 3.0      # motion between averaged instants, output pixels
+MAX_SUBFRAMES = 8
+SUBFRAME_STEP_PX = 2.0      # motion between averaged instants, output pixels
 
 
 @dataclass
