@@ -192,8 +192,32 @@ class ScenePlan:
     overrides: dict = field(default_factory=dict)
 
     def to_json(self) -> dict:
-        """Every factor, JSON-ready (numpy -> lists)."""
-        return _plain(asdict(self))
+        """Every factor, JSON-ready (numpy -> lists), plus ``summary``: the main factors in
+        one flat dict (for tables of which factors make the worst scenes)."""
+        return _plain({**asdict(self), "summary": self.summary()})
+
+    def summary(self) -> dict:
+        """The main factors, flat."""
+        same = [d for d in self.distractors if d["same_colour"]]
+        return {
+            "pattern": self.motion.pattern, "frequency_hz": self.motion.frequency_hz,
+            "across_m": self.motion.across, "colour": self.sponge.colour,
+            "pad": self.sponge.pad, "sponge_length_m": self.sponge.length,
+            "table_texture": self.table.texture, "table_near_hue": self.table.near_hue,
+            "same_colour_distractors": [d["kind"] for d in same],
+            "same_colour_on_wiping_area": any(d["overlaps_wiping_area"] for d in same),
+            "other_objects": len(self.distractors) - len(same),
+            "sleeve": self.person.sleeve, "image_size": [self.cameras.width, self.cameras.height],
+            "hfov_deg": self.cameras.hfov_deg, "k1": self.cameras.D1[0],
+            "baseline_m": self.cameras.baseline, "distance_m": self.cameras.distance,
+            "elevation_deg": self.cameras.elevation_deg, "azimuth_deg": self.cameras.azimuth_deg,
+            "codec": self.video.codec, "writer": self.video.writer, "fps": self.video.fps,
+            "exposure_s": self.effects.exposure_s, "noise_grey": self.effects.noise_grey,
+            "gain_drift": self.effects.gain_drift, "moving_shadow": self.effects.moving_shadow,
+            "full_occlusions": sum(o.kind == "full" for o in self.occlusions),
+            "partial_occlusions": sum(o.kind == "partial" for o in self.occlusions),
+            "T_world_left_written": self.write_T_world_left,
+        }
 
 
 def _plain(value):
@@ -515,7 +539,7 @@ def plan_video(rng, o: _Overrides, small: bool) -> Video:
     codec = o.get("codec", lambda: str(rng.choice(CODECS, p=[0.45, 0.35, 0.2])))
     fps = int(o.get("fps", lambda: int(rng.choice([30, 25, 60], p=[0.8, 0.1, 0.1]))))
     if codec == "h264":
-        return Video(codec, "pyav", fps, int(rng.integers(16, 31)),
+        return Video(codec, "pyav", fps, int(rng.integers(18, 29)),
                      int(rng.choice([0, 2, 3], p=[0.6, 0.2, 0.2])),
                      str(rng.choice(["superfast", "veryfast", "faster"])), None)
     if codec not in CODECS:
@@ -523,7 +547,7 @@ def plan_video(rng, o: _Overrides, small: bool) -> Video:
     writer = "opencv" if rng.random() < 0.5 else "pyav"
     bpp = None
     if writer == "pyav":
-        bpp = rng.uniform(0.08, 0.5) if codec == "mp4v" else rng.uniform(0.4, 1.6)
+        bpp = rng.uniform(0.05, 0.4) if codec == "mp4v" else rng.uniform(0.3, 1.0)
     return Video(codec, writer, fps, None, None, None, bpp)
 
 
