@@ -185,13 +185,15 @@ def _finger(start, direction, half, radius, length, colour, world, R):
              R @ normal_local, world(tip))]
 
 
-def free_arm(event, t: float, sponge_centre, eye_mid, camera_right, person, table_z) -> list:
+def free_arm(event, t: float, sponge_centre, eye_mid, camera_right, person) -> list:
     """The occluding arm at time t of an occlusion event (empty outside it).
 
     The arm lies across the line of sight from the cameras' midpoint to the sponge, at
-    ``event.depth_fraction`` of the way to the cameras, parallel to the cameras' baseline;
-    it slides in along its own axis, holds (the hand over the line of sight, shifted by
-    ``event.hold_offset``) and slides out.
+    ``event.depth_fraction`` of the way to the cameras, parallel to the cameras' baseline,
+    its elbow on the line of sight when it covers. It comes in sideways (from above or below
+    in the image, ``event.entry``): fast until its edge reaches the sponge, slowly across it
+    (the partial occlusion going in), then to ``event.hold_offset`` (0 covers fully); it
+    leaves the same way.
     """
     if not event.start <= t <= event.end:
         return []
@@ -202,26 +204,25 @@ def free_arm(event, t: float, sponge_centre, eye_mid, camera_right, person, tabl
     aim = sponge_centre + event.depth_fraction * distance * sight
     axis = camera_right - np.dot(camera_right, sight) * sight
     axis = event.side * _unit(axis)
-    scale = 1.0 - event.depth_fraction
-    away = 0.3 * s + 0.25 * scale + 0.1
+    up = np.cross(sight, axis) * event.entry
     if t < event.covered_from:
         x = (t - event.start) / (event.covered_from - event.start)
     elif t > event.covered_to:
         x = (event.end - t) / (event.end - event.covered_to)
     else:
         x = 1.0
-    x = x * x * (3 - 2 * x)
-    offset = (1 - x) * -away + x * event.hold_offset
-    palm_centre = aim + offset * axis
-    wrist = palm_centre - 0.05 * s * axis
+    edge, half = event.edge, event.sponge_half
+    offset = np.interp(x, [0.0, 0.3, 0.85, 1.0],
+                       [edge + half + 0.15, edge + 1.3 * half, max(edge - 1.3 * half,
+                                                                  event.hold_offset),
+                        event.hold_offset])
+    elbow = aim + offset * up
+    wrist = elbow + FOREARM * s * axis - 0.01 * up
+    shoulder = elbow + 5.0 * UPPER_ARM * s * _unit(-axis + 0.35 * sight)  # out of view
     sleeve = person.sleeve_bgr if person.sleeve == "long" else person.skin_bgr
     extra = 0.008 if person.sleeve == "long" else 0.0
-    up = np.cross(sight, axis)
-    elbow = wrist - FOREARM * s * axis + 0.02 * up
-    shoulder = elbow - UPPER_ARM * s * _unit(axis - 0.15 * up) * 1.6
     skin = person.skin_bgr
     return [Limb(shoulder, elbow, 0.05 * s, 0.043 * s, person.shirt_bgr),
             Limb(elbow, wrist, (0.038 + extra) * s, (0.029 + extra) * s, sleeve),
-            Limb(wrist, palm_centre + 0.03 * s * axis, 0.03 * s, 0.042 * s, skin),
-            Limb(palm_centre + 0.03 * s * axis, palm_centre + 0.1 * s * axis, 0.038 * s,
-                 0.03 * s, skin)]
+            Limb(wrist, wrist + 0.08 * s * axis, 0.03 * s, 0.042 * s, skin),
+            Limb(wrist + 0.08 * s * axis, wrist + 0.15 * s * axis, 0.038 * s, 0.03 * s, skin)]

@@ -119,6 +119,8 @@ class Canvas:
         self.size = (int(x1 - x0), int(y1 - y0))
         self.map_x = (fx * xy[..., 0] - x0).astype(np.float32)
         self.map_y = (fy * xy[..., 1] - y0).astype(np.float32)
+        #: largest undistorted normalised radius the image sees
+        self.undistorted_reach = float(np.linalg.norm(xy, axis=-1).max())
 
     def project(self, points_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Canvas pixels (..., 2) and depths (...,) of world points (..., 3)."""

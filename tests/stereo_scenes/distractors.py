@@ -67,7 +67,9 @@ def _bbox(cam, points):
 
 def plan_distractors(rng, sponge_hsv, footprint: np.ndarray, table, cameras) -> list[dict]:
     """Distractor dicts: kind, xy, yaw, size keys, bgr, same_colour, overlaps_wiping_area."""
-    kinds = [(str(k), True) for k in rng.choice(SAME_COLOUR_KINDS, int(rng.integers(0, 4)))]
+    count = int(rng.choice(4, p=[0.2, 0.35, 0.3, 0.15]))
+    kinds = [(str(k), True) for k in rng.choice(SAME_COLOUR_KINDS, count,
+                                                 p=[0.35, 0.2, 0.15, 0.15, 0.15])]
     kinds += [(str(k), False) for k in rng.choice(OTHER_KINDS, int(rng.integers(0, 5)))]
     foot_boxes = [_bbox(cam, footprint) for cam in cameras]
     fx0, fy0 = footprint[:, :2].min(axis=0)
@@ -79,10 +81,18 @@ def plan_distractors(rng, sponge_hsv, footprint: np.ndarray, table, cameras) -> 
         hsv = _colour(kind, same, sponge_hsv, rng)
         item["hsv"], item["bgr"] = [float(v) for v in hsv], list(hsv_to_bgr(hsv))
         overlap = kind in FLAT and rng.random() < 0.35
+        nearby = same and not overlap and rng.random() < 0.4
         for _ in range(60):
             if overlap:
                 xy = np.array([rng.uniform(fx0, fx1), rng.uniform(fy0, fy1)])
                 xy += rng.normal(size=2) * 0.1
+            elif nearby:   # just beside the wiping area
+                side = rng.uniform(0.08, 0.3)
+                xy = np.array([rng.uniform(fx0 - side, fx1 + side),
+                               rng.choice([fy0 - side, fy1 + side])])
+                if rng.random() < 0.5:
+                    xy = np.array([rng.choice([fx0 - side, fx1 + side]),
+                                   rng.uniform(fy0 - side, fy1 + side)])
             else:
                 xy = np.array([rng.uniform(table.x_near + 0.05, table.x_far - 0.05),
                                rng.uniform(table.y_min + 0.05, table.y_max - 0.05)])

@@ -34,9 +34,9 @@ def _thumb(image, label):
                        interpolation=cv2.INTER_AREA)
     thumb = cv2.copyMakeBorder(thumb, 0, max(0, 360 - thumb.shape[0]), 0, 0,
                                cv2.BORDER_CONSTANT, value=(0, 0, 0))[:360]
-    for colour, width in (((0, 0, 0), 3), ((255, 255, 255), 1)):
-        cv2.putText(thumb, label, (6, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.45, colour, width,
-                    cv2.LINE_AA)
+    cv2.rectangle(thumb, (0, 0), (THUMB_WIDTH, 24), (0, 0, 0), -1)
+    cv2.putText(thumb, label, (5, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (255, 255, 255), 1,
+                cv2.LINE_AA)
     return thumb
 
 
@@ -53,9 +53,10 @@ def seed_row(seed: int, small: bool) -> np.ndarray:
     for name, t in zip(("first", "mid", "occluded"), times):
         index = int(round(t * renderer.fps))
         left, _, row = renderer.frame(index)
-        label = (f"seed {seed} {name} t={row[0]:.1f}s {plan.sponge.colour}"
+        label = (f"{seed} {name} {row[0]:.1f}s {plan.sponge.colour}"
                  f"{'+' + plan.sponge.pad if plan.sponge.pad else ''} {plan.motion.pattern} "
-                 f"{plan.table.texture} vis={row[5]:.2f}/{row[6]:.2f}")
+                 f"{plan.table.texture} k1={plan.cameras.D1[0]:.2f} "
+                 f"vis {row[5]:.2f}/{row[6]:.2f}")
         thumbs.append(_thumb(effects.apply(left, row[0], 0), label))
     return np.hstack(thumbs)
 

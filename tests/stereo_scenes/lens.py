@@ -37,7 +37,7 @@ def _jacobian(x: np.ndarray, y: np.ndarray, D: np.ndarray):
     return dxx, dxy, dyx, dyy
 
 
-def undistort(xy_distorted: np.ndarray, D: np.ndarray, iterations: int = 30) -> np.ndarray:
+def undistort(xy_distorted: np.ndarray, D: np.ndarray, iterations: int = 60) -> np.ndarray:
     """Undistorted normalised coordinates (..., 2) whose :func:`distort` is ``xy_distorted``.
 
     Newton's method from the distorted point; exact to ~1e-12 wherever the model is monotonic
@@ -51,10 +51,12 @@ def undistort(xy_distorted: np.ndarray, D: np.ndarray, iterations: int = 30) -> 
         dxx, dxy, dyx, dyy = _jacobian(xy[..., 0], xy[..., 1], D)
         det = dxx * dyy - dxy * dyx
         det = np.where(np.abs(det) < 1e-9, 1e-9, det)
-        step_x = (dyy * residual[..., 0] - dxy * residual[..., 1]) / det
-        step_y = (-dyx * residual[..., 0] + dxx * residual[..., 1]) / det
-        xy[..., 0] -= step_x
-        xy[..., 1] -= step_y
+        step = np.stack([(dyy * residual[..., 0] - dxy * residual[..., 1]) / det,
+                         (-dyx * residual[..., 0] + dxx * residual[..., 1]) / det], axis=-1)
+        # damped: a step never moves a point by more than a quarter of its radius (+0.05)
+        size = np.linalg.norm(step, axis=-1, keepdims=True)
+        limit = 0.25 * np.linalg.norm(xy, axis=-1, keepdims=True) + 0.05
+        xy -= step * np.minimum(1.0, limit / np.maximum(size, 1e-300))
         if np.max(np.abs(residual)) < 1e-13:
             break
     return xy

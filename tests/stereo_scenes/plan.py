@@ -141,8 +141,11 @@ class Occlusion:
     covered_to: float               # .. to
     end: float
     depth_fraction: float           # where between sponge (0) and cameras (1) the arm passes
-    side: int                       # +1: the arm enters from the image's left, -1 right
-    hold_offset: float              # along the arm at the hold (m in the arm's plane); 0 = full
+    side: int                       # +1: the hand is on the image's right, -1 left
+    entry: int                      # +1: the arm comes in from above in the image, -1 below
+    edge: float                     # half-width of the arm where it covers, metres
+    sponge_half: float              # half the sponge's size seen in the arm's plane, metres
+    hold_offset: float              # arm's offset from the line of sight at the hold; 0 = full
 
 
 @dataclass
@@ -189,8 +192,32 @@ class ScenePlan:
     overrides: dict = field(default_factory=dict)
 
     def to_json(self) -> dict:
-        """Every factor, JSON-ready (numpy -> lists)."""
-        return _plain(asdict(self))
+        """Every factor, JSON-ready (numpy -> lists), plus ``summary``: the main factors in
+        one flat dict (for tables of which factors make the worst scenes)."""
+        return _plain({**asdict(self), "summary": self.summary()})
+
+    def summary(self) -> dict:
+        """The main factors, flat."""
+        same = [d for d in self.distractors if d["same_colour"]]
+        return {
+            "pattern": self.motion.pattern, "frequency_hz": self.motion.frequency_hz,
+            "across_m": self.motion.across, "colour": self.sponge.colour,
+            "pad": self.sponge.pad, "sponge_length_m": self.sponge.length,
+            "table_texture": self.table.texture, "table_near_hue": self.table.near_hue,
+            "same_colour_distractors": [d["kind"] for d in same],
+            "same_colour_on_wiping_area": any(d["overlaps_wiping_area"] for d in same),
+            "other_objects": len(self.distractors) - len(same),
+            "sleeve": self.person.sleeve, "image_size": [self.cameras.width, self.cameras.height],
+            "hfov_deg": self.cameras.hfov_deg, "k1": self.cameras.D1[0],
+            "baseline_m": self.cameras.baseline, "distance_m": self.cameras.distance,
+            "elevation_deg": self.cameras.elevation_deg, "azimuth_deg": self.cameras.azimuth_deg,
+            "codec": self.video.codec, "writer": self.video.writer, "fps": self.video.fps,
+            "exposure_s": self.effects.exposure_s, "noise_grey": self.effects.noise_grey,
+            "gain_drift": self.effects.gain_drift, "moving_shadow": self.effects.moving_shadow,
+            "full_occlusions": sum(o.kind == "full" for o in self.occlusions),
+            "partial_occlusions": sum(o.kind == "partial" for o in self.occlusions),
+            "T_world_left_written": self.write_T_world_left,
+        }
 
 
 def _plain(value):
@@ -376,8 +403,8 @@ def plan_cameras(rng, o: _Overrides, small: bool, motion: Motion, sponge: Sponge
         if k1_fixed:
             k1 = k1_value
         else:
-            k1 = 0.0 if rng.random() < 0.15 else -0.45 * rng.uniform(0.05, 1.0) ** 1.3
-            k1 *= min(1.0, (hfov - 30) / 50)
+            k1 = 0.0 if rng.random() < 0.15 else -0.45 * rng.uniform(0.05, 1.0)
+            k1 *= min(1.0, (hfov - 20) / 45)
         K1, D1 = _intrinsics(rng, width, height, hfov, k1)
         K2 = K1.copy()
         K2[0, 0] *= 1 + rng.uniform(-0.01, 0.01)
@@ -395,15 +422,13 @@ def plan_cameras(rng, o: _Overrides, small: bool, motion: Motion, sponge: Sponge
                                              math.sin(elevation)])
         aim = centre + np.array([*rng.uniform(-0.25, 0.25, 2) * distance * 0.5, 0.0])
         T_head = look_at(head, aim, roll)
-        right_axis = T_head[:3, 0]
-        toe_in = rng.uniform(0.0, 1.0)
+        toe_in = math.atan(rng.uniform(0.0, 1.0) * 0.5 * baseline / np.linalg.norm(aim - head))
         poses = []
         for sign in (-1, 1):
-            eye = head + sign * 0.5 * baseline * right_axis
-            target = aim + (1 - toe_in) * sign * 0.5 * baseline * right_axis
-            T = look_at(eye, target, roll)
+            T = T_head.copy()
+            T[:3, 3] = head + sign * 0.5 * baseline * T_head[:3, 0]
             wobble = rotation(rng.normal(size=3), math.radians(rng.uniform(0, 1.0)))
-            T[:3, :3] = T[:3, :3] @ wobble
+            T[:3, :3] = T_head[:3, :3] @ rotation([0, 1.0, 0], -sign * toe_in) @ wobble
             poses.append(T)
         cams = (Camera(width, height, K1, D1, poses[0]), Camera(width, height, K2, D2, poses[1]))
         if all(_sees(cam, foot, 0.04) for cam in cams):
@@ -447,23 +472,28 @@ def plan_person(rng, motion: Motion, sponge: Sponge, table: Table) -> Person:
                   rng.uniform(0.3, 0.55))
 
 
-def plan_occlusions(rng, duration: float, sponge: Sponge, cameras: Cameras) -> list[Occlusion]:
+def plan_occlusions(rng, duration: float, sponge: Sponge, cameras: Cameras,
+                    person: Person) -> list[Occlusion]:
+    """At least one full occlusion per started 25 s (the first event is a full one), plus
+    0-2 partial ones per 25 s; events do not overlap and start after the first 2 s (or 30 %
+    of a short demo).
+
+    The free arm covers the sponge when its narrowest part near the elbow looks wider than
+    the sponge's diagonal by a margin: that fixes how far towards the cameras it passes.
+    """
     n_full = max(1, math.ceil(duration / 25.0 - 1e-9))
     n_partial = int(rng.integers(0, 1 + int(duration // 12)))
     kinds = ["full"] * n_full + ["partial"] * n_partial
     rng.shuffle(kinds)
-    if kinds[0] != "full":                            # the first event is always a full one
-        kinds.remove("full")
-        kinds.insert(0, "full")
+    kinds.remove("full")
+    kinds.insert(0, "full")
     t_min = min(2.0, 0.3 * duration)
     usable = duration - 0.3 - t_min
-    lengths = []
-    for kind in kinds:
-        hold = rng.uniform(0.5, 1.5) if kind == "full" else rng.uniform(0.3, 1.0)
-        lengths.append([rng.uniform(0.25, 0.5), hold, rng.uniform(0.25, 0.5)])
-    lengths = np.array(lengths)
-    while lengths.sum() > 0.85 * usable and len(kinds) > 1:
-        drop = max(i for i, k in enumerate(kinds) if k == "partial" or i > 0)
+    lengths = np.array([[rng.uniform(0.25, 0.5),
+                         rng.uniform(0.5, 1.5) if kind == "full" else rng.uniform(0.3, 1.0),
+                         rng.uniform(0.25, 0.5)] for kind in kinds])
+    while lengths.sum() > 0.85 * usable and "partial" in kinds:
+        drop = len(kinds) - 1 - kinds[::-1].index("partial")
         kinds.pop(drop)
         lengths = np.delete(lengths, drop, axis=0)
     if lengths.sum() > 0.85 * usable:
@@ -472,14 +502,18 @@ def plan_occlusions(rng, duration: float, sponge: Sponge, cameras: Cameras) -> l
     free = max(0.0, usable - lengths.sum())
     gaps = rng.dirichlet(np.ones(len(kinds) + 1)) * free
     diag = math.sqrt(sponge.length ** 2 + sponge.width ** 2 + sponge.height ** 2)
+    distance = cameras.distance  # cameras' midpoint to the wiping centre
+    edge = (0.038 + (0.008 if person.sleeve == "long" else 0.0)) * person.hand_scale
     events, t = [], t_min
     for kind, (t_in, hold, t_out), gap in zip(kinds, lengths, gaps):
         t += gap
-        cover = 0.058 / (1.3 * diag)                  # narrowest part of the arm / sponge size
-        fraction = float(np.clip(1 - cover + rng.uniform(0.0, 0.08), 0.25, 0.85))
-        offset = 0.0 if kind == "full" else float(rng.choice([-1, 1]) * rng.uniform(0.1, 0.14))
+        fraction = 1 - 2 * edge / (1.35 * diag) + rng.uniform(0.0, 0.05)
+        fraction = float(np.clip(fraction, 0.3, 1 - 0.1 / distance))
+        half = 0.5 * diag * (1 - fraction)
+        offset = 0.0 if kind == "full" else float(edge + rng.uniform(-0.6, 0.6) * half)
         events.append(Occlusion(kind, t, t + t_in, t + t_in + hold, t + t_in + hold + t_out,
-                                fraction, int(rng.choice([-1, 1])), offset))
+                                fraction, int(rng.choice([-1, 1])), int(rng.choice([-1, 1])),
+                                edge, half, offset))
         t += t_in + hold + t_out
     return events
 
@@ -505,15 +539,15 @@ def plan_video(rng, o: _Overrides, small: bool) -> Video:
     codec = o.get("codec", lambda: str(rng.choice(CODECS, p=[0.45, 0.35, 0.2])))
     fps = int(o.get("fps", lambda: int(rng.choice([30, 25, 60], p=[0.8, 0.1, 0.1]))))
     if codec == "h264":
-        return Video(codec, "pyav", fps, int(rng.integers(16, 31)),
+        return Video(codec, "pyav", fps, int(rng.integers(18, 29)),
                      int(rng.choice([0, 2, 3], p=[0.6, 0.2, 0.2])),
-                     str(rng.choice(["veryfast", "faster", "fast"])), None)
+                     str(rng.choice(["superfast", "veryfast", "faster"])), None)
     if codec not in CODECS:
         raise ValueError(f"unknown codec {codec!r}; expected one of {CODECS}")
     writer = "opencv" if rng.random() < 0.5 else "pyav"
     bpp = None
     if writer == "pyav":
-        bpp = rng.uniform(0.08, 0.5) if codec == "mp4v" else rng.uniform(0.4, 1.6)
+        bpp = rng.uniform(0.05, 0.4) if codec == "mp4v" else rng.uniform(0.3, 1.0)
     return Video(codec, writer, fps, None, None, None, bpp)
 
 
@@ -531,7 +565,7 @@ def plan_scene(seed: int, duration: float | None = None, small: bool = False,
     person = plan_person(rngs["person"], motion, sponge, table)
     video = plan_video(rngs["video"], o, small)
     effects = plan_effects(rngs["effects"], o, video.fps)
-    occlusions = plan_occlusions(rngs["occlusions"], duration, sponge, cameras)
+    occlusions = plan_occlusions(rngs["occlusions"], duration, sponge, cameras, person)
     foot = footprint_points(motion, sponge, table.height, sponge.height + 0.08)
     distractors = plan_distractors(rngs["distractors"], sponge.body_hsv, foot, table,
                                    cameras.pair())

@@ -18,7 +18,7 @@ from tests.stereo_scenes.shapes import clip_polygon, perpendicular_axes
 
 SHIFT = 4                 # sub-pixel bits of cv2.fillPoly
 NEAR = 0.02               # metres
-CAPSULE_BANDS = 5
+OUTLINE_ANGLES = np.linspace(0, 2 * np.pi, 16, endpoint=False)
 
 
 @dataclass
@@ -102,46 +102,45 @@ class Painter:
         angle = np.linspace(0, 2 * np.pi, n, endpoint=False)
         return uv - self.origin + r_px * np.stack([np.cos(angle), np.sin(angle)], axis=-1)
 
-    def capsule_outline(self, p0, p1, r0, r1) -> np.ndarray | None:
-        """Window pixels of the convex outline of a tapered capsule, or None behind the eye."""
-        z = self.canvas.camera.to_camera(np.array([p0, p1]))[:, 2]
-        if np.any(z < NEAR + max(r0, r1)):
-            return None
-        pts = np.vstack([self._sphere_outline(p0, r0), self._sphere_outline(p1, r1)])
-        return cv2.convexHull(pts.astype(np.float32))[:, 0, :]
-
     def capsule(self, p0, p1, r0, r1, colour, target: np.ndarray | None = None):
-        """A tapered capsule (limb, finger) shaded as a cylinder; into ``target`` as a plain
-        mask when given."""
-        p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
-        outline = self.capsule_outline(p0, p1, r0, r1)
-        if outline is None:
+        """A tapered capsule (limb, finger) shaded as a cylinder in bands; into ``target``
+        as a plain mask of value ``colour`` when given."""
+        ends = clip_capsule(self.canvas.camera, p0, p1, r0, r1)
+        if ends is None:
             return
-        if target is not None:
-            self.fill_pixels(outline, colour, target)
-            return
+        p0, p1, cut0, cut1 = ends
+        uv, z = self.canvas.project(np.array([p0, p1]))
+        radius_px = self.canvas.focal() * np.array([r0, r1]) / z
+        circle = np.stack([np.cos(OUTLINE_ANGLES), np.sin(OUTLINE_ANGLES)], axis=-1)
+        # a cut end has no round cap: its sides end at the cut
+        pts = [uv[i] + radius_px[i] * (0.1 if cut else 1.0) * circle
+               for i, cut in enumerate((cut0, cut1))]
         axis = p1 - p0
         length = np.linalg.norm(axis)
         view = self.eye - 0.5 * (p0 + p1)
         view /= np.linalg.norm(view)
-        if length < 1e-6:
-            side, front = perpendicular_axes(view)
-            front = view
-        else:
-            axis /= length
-            side = np.cross(axis, view)
-            if np.linalg.norm(side) < 1e-6:
-                side = perpendicular_axes(axis)[0]
-            side /= np.linalg.norm(side)
-            front = np.cross(side, axis)
+        side = np.cross(axis / length, view) if length > 1e-6 else perpendicular_axes(view)[0]
+        if np.linalg.norm(side) < 1e-6:
+            side = perpendicular_axes(axis)[0]
+        side /= np.linalg.norm(side)
+        front = view - np.dot(view, side) * side
+        front /= np.linalg.norm(front)
+        bands = 1 if target is not None else int(np.clip(radius_px.max() / 2.0, 1, 16))
+        edges = np.linspace(-0.97, 0.97, bands + 1)
+        corners = np.concatenate([p0 + r0 * edges[:, None] * side, p1 + r1 * edges[:, None] * side])
+        corner_px = self.to_pixels(corners)
+        rim = np.vstack(pts + [corner_px + self.origin])
+        outline = cv2.convexHull((rim - self.origin).astype(np.float32))[:, 0, :]
+        if target is not None:
+            self.fill_pixels(outline, colour, target)
+            return
         self.fill_pixels(outline, self.light.shade(colour, front * 0.6))
-        edges = np.linspace(-0.97, 0.97, CAPSULE_BANDS + 1)
-        for lo, hi in zip(edges[:-1], edges[1:]):
-            mid = 0.5 * (lo + hi)
+        n = bands + 1
+        for k in range(bands):
+            mid = 0.5 * (edges[k] + edges[k + 1])
             normal = mid * side + np.sqrt(1 - mid * mid) * front
-            quad = np.array([p0 + r0 * lo * side, p1 + r1 * lo * side,
-                             p1 + r1 * hi * side, p0 + r0 * hi * side])
-            self.polygon(quad, self.light.shade(colour, normal))
+            quad = corner_px[[k, n + k, n + k + 1, k + 1]]
+            self.fill_pixels(quad, self.light.shade(colour, normal))
 
     def sphere(self, centre, radius, colour):
         """A shaded sphere (a round fruit, a head)."""
@@ -182,6 +181,22 @@ class Painter:
         a = alpha.astype(np.float32)[..., None] * (shade / 255.0)
         region = self.image[y0:y1, x0:x1]
         region[:] = np.clip(region * (1.0 - alpha[..., None] / 255.0) + warped * a, 0, 255)
+
+
+def clip_capsule(camera, p0, p1, r0, r1):
+    """A capsule's end points cut where it crosses the camera's near plane (with room for
+    its radius) and whether each was cut, ``(p0, p1, cut0, cut1)``, or None when all of it
+    is behind."""
+    p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
+    z0, z1 = camera.to_camera(np.array([p0, p1]))[:, 2]
+    near0, near1 = NEAR + 1.2 * r0, NEAR + 1.2 * r1
+    if z0 < near0 and z1 < near1:
+        return None
+    if z0 < near0:
+        return p0 + (p1 - p0) * (near0 - z0) / (z1 - z0), p1, True, False
+    if z1 < near1:
+        return p0, p1 + (p0 - p1) * (near1 - z1) / (z0 - z1), False, True
+    return p0, p1, False, False
 
 
 def plane_mapping(origin, axis_u, axis_v, metres_per_pixel: float) -> np.ndarray:

@@ -24,11 +24,11 @@ from tests.stereo_scenes.actors import HoldingHand, SpongeModel, free_arm, holdi
 from tests.stereo_scenes.camera import Canvas
 from tests.stereo_scenes.lens import distort
 from tests.stereo_scenes.motion import WipingMotion
-from tests.stereo_scenes.raster import Light, Painter
+from tests.stereo_scenes.raster import NEAR, Light, Painter, clip_capsule
 from tests.stereo_scenes.static_scene import StaticTextures, draw_static
 
-MAX_SUBFRAMES = 10
-SUBFRAME_STEP_PX = 1.5      # motion between averaged instants, output pixels
+MAX_SUBFRAMES = 8
+SUBFRAME_STEP_PX = 2.0      # motion between averaged instants, output pixels
 
 
 @dataclass
@@ -66,7 +66,7 @@ class Scene:
         occluder = []
         for event in self.plan.occlusions:
             occluder += free_arm(event, t, centre, self.eye_mid, self.camera_right,
-                                 self.plan.person, self.plan.table.height)
+                                 self.plan.person)
         return MovingState(t, centre, R, float(yaw[0]), self.sponge.world_faces(centre, R),
                            self.sponge.world_vertices(centre, R),
                            holding_hand(self.plan.person, self.sponge, centre, R,
@@ -83,17 +83,16 @@ class CameraView:
         w, h = self.canvas.size
         self.static = np.zeros((h, w, 3), np.uint8)
         draw_static(Painter(self.canvas, self.static, (0, 0), light), plan, tex)
-        self.sigma = max(0.45, plan.effects.lens_blur_px) * scale
-        self.background = self._resample(self._blur(self.static), 0, 0, camera.height, camera.width)
+        self.sigma = max(0.45, plan.effects.lens_blur_px)
+        self.background = self._resample(self.static, 0, 0, camera.height, camera.width)
         self.table_z = plan.table.height
 
-    def _blur(self, image):
-        return cv2.GaussianBlur(image, (0, 0), self.sigma)
-
     def _resample(self, canvas_image, y0, x0, y1, x1, origin=(0, 0)):
+        """Output pixels [y0:y1, x0:x1] through the lens, blurred by the lens blur."""
         mx = self.canvas.map_x[y0:y1, x0:x1] - np.float32(origin[0])
         my = self.canvas.map_y[y0:y1, x0:x1] - np.float32(origin[1])
-        return cv2.remap(canvas_image, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        image = cv2.remap(canvas_image, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        return cv2.GaussianBlur(image, (0, 0), self.sigma)
 
     # -- the window of moving things ------------------------------------------------------
     def _bounding_points(self, state: MovingState) -> np.ndarray:
@@ -102,7 +101,10 @@ class CameraView:
         axes = self.camera.T_world_cam[:3, :2].T
         for group, shadow in ((limbs, True), (state.occluder, False)):
             for limb in group:
-                for p, r in ((limb.p0, limb.r0), (limb.p1, limb.r1)):
+                ends = clip_capsule(self.camera, limb.p0, limb.p1, limb.r0, limb.r1)
+                if ends is None:
+                    continue
+                for p, r in zip(ends[:2], (limb.r0, limb.r1)):
                     ring = p + r * 1.3 * np.vstack([axes, -axes])
                     pts.append(ring)
                     if shadow:
@@ -115,39 +117,64 @@ class CameraView:
         return points - np.outer(lift / L[2], L)
 
     def _window(self, states):
-        """(output rows/cols window, canvas window) covering the moving things, or None."""
+        """(output window, pasted part of it, canvas window) covering the moving things, as
+        (y0, x0, y1, x1) boxes, or None when they are out of view."""
         pts = np.vstack([self._bounding_points(s) for s in states])
         cam_pts = self.camera.to_camera(pts)
-        cam_pts = cam_pts[cam_pts[:, 2] > 0.02]
-        xy = distort(cam_pts[:, :2] / cam_pts[:, 2:3], self.camera.D)
-        K = self.camera.K
-        uv = xy * [K[0, 0], K[1, 1]] + [K[0, 2], K[1, 2]]
-        pad = 3 + 3 * self.plan.effects.lens_blur_px
-        x0, y0 = np.floor(uv.min(axis=0) - pad).astype(int)
-        x1, y1 = np.ceil(uv.max(axis=0) + pad).astype(int)
-        x0, y0 = max(x0, 0), max(y0, 0)
-        x1, y1 = min(x1, self.camera.width), min(y1, self.camera.height)
-        if x1 <= x0 or y1 <= y0:
+        w, h = self.camera.width, self.camera.height
+        xy = cam_pts[:, :2] / np.maximum(cam_pts[:, 2:3], 1e-3)
+        if np.any(cam_pts[:, 2] < NEAR):
+            x0, y0, x1, y1 = 0, 0, w, h
+        else:
+            # rays outside the image: pulled in to its edge (the lens model folds past it)
+            radius = np.linalg.norm(xy, axis=1, keepdims=True)
+            reach = self.canvas.undistorted_reach
+            xy = xy * np.minimum(1.0, reach / np.maximum(radius, 1e-12))
+            K = self.camera.K
+            uv = distort(xy, self.camera.D) * [K[0, 0], K[1, 1]] + [K[0, 2], K[1, 2]]
+            x0, y0 = np.floor(uv.min(axis=0)).astype(int) - 3
+            x1, y1 = np.ceil(uv.max(axis=0)).astype(int) + 3
+        pad = int(np.ceil(3 * self.sigma)) + 1
+
+        def clipped(p):
+            return max(y0 - p, 0), max(x0 - p, 0), min(y1 + p, h), min(x1 + p, w)
+
+        paste, window = clipped(pad), clipped(2 * pad)
+        if paste[2] <= paste[0] or paste[3] <= paste[1]:
             return None
-        mx, my = self.canvas.map_x[y0:y1, x0:x1], self.canvas.map_y[y0:y1, x0:x1]
-        cpad = int(np.ceil(3 * self.sigma)) + 3
+        wy0, wx0, wy1, wx1 = window
+        mx, my = self.canvas.map_x[wy0:wy1, wx0:wx1], self.canvas.map_y[wy0:wy1, wx0:wx1]
         cw, ch = self.canvas.size
-        cx0, cy0 = max(int(mx.min()) - cpad, 0), max(int(my.min()) - cpad, 0)
-        cx1, cy1 = min(int(mx.max()) + cpad + 2, cw), min(int(my.max()) + cpad + 2, ch)
-        return (y0, x0, y1, x1), (cy0, cx0, cy1, cx1)
+        canvas = (max(int(my.min()) - 2, 0), max(int(mx.min()) - 2, 0),
+                  min(int(my.max()) + 3, ch), min(int(mx.max()) + 3, cw))
+        return window, paste, canvas
 
     # -- painting ---------------------------------------------------------------------------
-    def _shadow(self, painter: Painter, state: MovingState):
-        mask = np.zeros(painter.image.shape[:2], np.uint8)
-        painter.silhouette(self._on_table(state.vertices), mask)
-        for limb in state.hand.arm + state.hand.hand:
-            p0, p1 = self._on_table(np.array([limb.p0, limb.p1]))
-            painter.capsule(p0, p1, limb.r0, limb.r1, 255, target=mask)
+    def _cast_shadow(self, painter: Painter, state: MovingState):
+        """Darkens the painter's image where the sponge, hand and arm shade the table."""
+        outline = self._on_table(state.vertices)
+        limbs = [(self._on_table(np.array([limb.p0, limb.p1])), limb)
+                 for limb in state.hand.arm + state.hand.hand]
+        ends = np.vstack([outline] + [e for e, _ in limbs])
+        pixels = painter.to_pixels(ends)
         blur = max(1.0, 0.006 * self.canvas.focal())
+        depth = float(self.canvas.project(state.centre)[1])
+        pad = int(3 * blur + 0.08 * self.canvas.focal() / max(0.3, depth))
+        h, w = painter.image.shape[:2]
+        x0, y0 = np.maximum(np.floor(pixels.min(axis=0)).astype(int) - pad, 0)
+        x1, y1 = np.minimum(np.ceil(pixels.max(axis=0)).astype(int) + pad, [w, h])
+        if x1 <= x0 or y1 <= y0:
+            return
+        local = Painter(self.canvas, painter.image[y0:y1, x0:x1],
+                        painter.origin + [x0, y0], self.light)
+        mask = np.zeros((y1 - y0, x1 - x0), np.uint8)
+        local.silhouette(outline, mask)
+        for (p0, p1), limb in limbs:
+            local.capsule(p0, p1, limb.r0, limb.r1, 255, target=mask)
         mask = cv2.GaussianBlur(mask, (0, 0), blur)
         strength = 0.75 * self.light.diffuse / (self.light.ambient + self.light.diffuse)
-        gain = 1.0 - strength * mask.astype(np.float32) / 255.0
-        return gain[..., None]
+        gain = cv2.merge([255 - cv2.convertScaleAbs(mask, alpha=strength)] * 3)
+        cv2.multiply(local.image, gain, dst=local.image, scale=1 / 255.0)
 
     def _paint_moving(self, painter: Painter, state: MovingState):
         hidden, shown = [], []
@@ -201,18 +228,22 @@ class CameraView:
         window = self._window(states)
         if window is None:
             return frame
-        (y0, x0, y1, x1), (cy0, cx0, cy1, cx1) = window
-        base = self.static[cy0:cy1, cx0:cx1]
-        mid = states[len(states) // 2]
-        shadow = self._shadow(Painter(self.canvas, base, (cx0, cy0), self.light), mid)
-        shaded = np.clip(base * shadow, 0, 255).astype(np.uint8)
-        total = np.zeros(base.shape, np.float32)
-        for state in states:
-            work = shaded.copy()
-            self._paint_moving(Painter(self.canvas, work, (cx0, cy0), self.light), state)
-            total += work
-        average = np.clip(total / len(states) + 0.5, 0, 255).astype(np.uint8)
-        frame[y0:y1, x0:x1] = self._resample(self._blur(average), y0, x0, y1, x1, (cx0, cy0))
+        (y0, x0, y1, x1), (py0, px0, py1, px1), (cy0, cx0, cy1, cx1) = window
+        base = self.static[cy0:cy1, cx0:cx1].copy()
+        origin = (cx0, cy0)
+        self._cast_shadow(Painter(self.canvas, base, origin, self.light), states[len(states) // 2])
+        if len(states) == 1:
+            self._paint_moving(Painter(self.canvas, base, origin, self.light), states[0])
+            average = base
+        else:
+            total = np.zeros(base.shape, np.float32)
+            for state in states:
+                work = base.copy()
+                self._paint_moving(Painter(self.canvas, work, origin, self.light), state)
+                cv2.accumulate(work, total)
+            average = cv2.convertScaleAbs(total, alpha=1.0 / len(states))
+        out = self._resample(average, y0, x0, y1, x1, origin)
+        frame[py0:py1, px0:px1] = out[py0 - y0:py1 - y0, px0 - x0:px1 - x0]
         return frame
 
 
@@ -222,7 +253,7 @@ class SceneRenderer:
     def __init__(self, plan):
         self.plan = plan
         fx = plan.cameras.K1[0][0]
-        scale = 2.0 if plan.small else 1.5
+        scale = 1.5 if plan.small else 1.0
         rng = np.random.default_rng([plan.seed, 101])
         e = plan.effects
         self.light = Light(np.array(e.light_direction), e.ambient, 1.0 - e.ambient, e.light_gain)

@@ -47,22 +47,30 @@ def _shape(size_m, px_per_m):
     return int(round(size_m[1] * px_per_m)), int(round(size_m[0] * px_per_m))
 
 
+def streaks(rng, shape, along_px: float, across_px: float) -> np.ndarray:
+    """Noise stretched along x (wood grain, brushed surfaces), about [-1, 1], (h, w)."""
+    h, w = shape
+    small = noise_field(rng, (max(2, int(h / across_px) + 2), max(2, int(w / along_px) + 2)), 1.0)
+    return cv2.resize(small, (w, h), interpolation=cv2.INTER_CUBIC)
+
+
 def wood(rng, size_m, px_per_m, hsv) -> np.ndarray:
-    """Planks along the texture's x with rings, grain and per-plank tone."""
+    """Planks along the texture's x: per-plank tone, long grain streaks, soft growth rings."""
     h, w = _shape(size_m, px_per_m)
-    y, x = np.mgrid[0:h, 0:w].astype(np.float32) / px_per_m
+    y = np.mgrid[0:h, 0:w][0].astype(np.float32) / px_per_m
     plank_m = rng.uniform(0.09, 0.2)
     plank = np.floor(y / plank_m)
     tone = np.asarray(rng.uniform(-18, 18, int(plank.max()) + 2), np.float32)[plank.astype(int)]
-    warp = fractal_noise(rng, (h, w), 0.25 * px_per_m) * rng.uniform(0.01, 0.03)
-    ring_m = rng.uniform(0.004, 0.012)
-    rings = np.sin(2 * np.pi * (y + warp + 0.15 * np.sin(x * rng.uniform(1, 4))) / ring_m)
-    grain = noise_field(rng, (h, w), max(2.0, 0.002 * px_per_m)) * 0.4
-    val = hsv[2] + tone + rings * rng.uniform(6, 16) + grain * 10
+    grain = (streaks(rng, (h, w), 0.3 * px_per_m, 0.0015 * px_per_m) * rng.uniform(6, 14)
+             + streaks(rng, (h, w), 0.08 * px_per_m, 0.004 * px_per_m) * rng.uniform(4, 10))
+    warp = streaks(rng, (h, w), 0.4 * px_per_m, 0.03 * px_per_m) * rng.uniform(0.01, 0.03)
+    ring_m = rng.uniform(0.008, 0.02)
+    rings = np.abs(np.sin(np.pi * (y + warp) / ring_m)) ** 6 * rng.uniform(8, 20)
+    val = hsv[2] + tone + grain - rings
     seam = np.abs(y / plank_m - np.round(y / plank_m)) * plank_m < 0.0012
     val = np.where(seam, val * 0.6, val)
-    sat = hsv[1] + rings * 8 + tone * 0.5
-    return _from_hsv_planes(np.full_like(val, hsv[0]) + grain, sat, val)
+    sat = hsv[1] + grain * 0.6 + tone * 0.5 + rings * 0.5
+    return _from_hsv_planes(np.full_like(val, hsv[0]) + grain * 0.1, sat, val)
 
 
 def laminate(rng, size_m, px_per_m, hsv) -> np.ndarray:

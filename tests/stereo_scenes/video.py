@@ -42,7 +42,7 @@ class VideoFile:
                               "preset": video.preset, "threads": "1"}
         else:
             stream.bit_rate = int(video.bits_per_pixel * width * height * video.fps)
-            stream.codec_context.flags |= "BITEXACT"
+            stream.codec_context.flags |= av.codec.context.Flags.bitexact
         self._stream = stream
 
     def write(self, frame: np.ndarray):
