@@ -16,7 +16,7 @@ def _blob(point_camera, size, label):
     """A blob as a camera at the origin sees an object of ``size`` metres at a point."""
     uv = K[:2, :2] @ (point_camera[:2] / point_camera[2]) + K[:2, 2]
     area = (size * K[0, 0] / point_camera[2]) ** 2
-    return Blob(uv, area, area, (0, 0, 1, 1), label)
+    return Blob(uv, area, (0, 0, 1, 1), np.zeros((1, 1, 2), np.int32), label)
 
 
 def _ray(blob):
@@ -51,14 +51,15 @@ def test_pairs_follow_the_epipolar_geometry_and_plausible_sizes():
 
 def test_a_blob_pair_that_breaks_the_epipolar_geometry_is_no_candidate():
     left, right = _views([(np.array([0.05, 0.1, 0.8]), 0.09)])
-    shifted = Blob(right[0].centroid + [0.0, 25.0], right[0].area, right[0].mass, (0, 0, 1, 1), 1)
+    shifted = Blob(right[0].centroid + [0.0, 25.0], right[0].area, (0, 0, 1, 1),
+                   right[0].outline, 1)
     found = stereo_candidates(left, [shifted], np.array([_ray(left[0])]),
                               np.array([_ray(shifted)]), R, T, (600.0, 600.0), 1.0, K, K)
     assert found == []
 
 
 def _candidate(point, size):
-    b = Blob(np.zeros(2), 1.0, 1.0, (0, 0, 1, 1), 1)
+    b = Blob(np.zeros(2), 1.0, (0, 0, 1, 1), np.zeros((1, 1, 2), np.int32), 1)
     return StereoCandidate(np.asarray(point, float), size, (b, b), 0.0)
 
 

@@ -43,27 +43,27 @@ def prior_model(colour: HsvRange, hue_margin: float = HUE_MARGIN,
 
 @dataclass(frozen=True)
 class Blob:
-    """A connected region of a probability image.
+    """A connected region of a probability image (its outer outline; holes, such as a hand
+    on top of the sponge, are inside it).
 
     Attributes
     ----------
     centroid : ndarray, shape (2,)
-        Probability-weighted centre (u, v) of the region and the pixel around it (its soft
-        edge), pixels of the image it was found in.
+        Centre (u, v) of the area its outline encloses, pixels of the image it was found in.
     area : float
-        Pixels of the region (above the threshold).
-    mass : float
-        Sum of the probabilities inside the region and the pixel around it.
+        Pixels its outline encloses.
     bbox : tuple of int
         (x0, y0, x1, y1), exclusive upper bounds.
+    outline : ndarray, shape (k, 1, 2)
+        The outline, int32 pixel coordinates (OpenCV contour).
     label : int
-        Its label in the label image of :func:`find_blobs`.
+        Its index in the list :func:`find_blobs` returned.
     """
 
     centroid: np.ndarray
     area: float
-    mass: float
     bbox: tuple[int, int, int, int]
+    outline: np.ndarray
     label: int
 
     @property
@@ -73,31 +73,37 @@ class Blob:
 
 
 def find_blobs(probability: np.ndarray, min_area: float, threshold: float = 0.5,
-               opening: int = 3) -> tuple[list[Blob], np.ndarray]:
-    """Connected regions of ``probability > threshold`` (8-connected, after an opening of
-    ``opening`` pixels) with at least ``min_area`` pixels, largest first, and the label
-    image (int32, 0 = no region; labels of dropped small regions are kept in it)."""
+               opening: int = 3) -> list[Blob]:
+    """Connected regions of ``probability > threshold`` (after an opening of ``opening``
+    pixels) whose outlines enclose at least ``min_area`` pixels, largest first."""
     mask = (probability > threshold).astype(np.uint8)
     if opening > 1:
         mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((opening, opening), np.uint8))
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
-    blobs = []
-    for label in range(1, count):
-        area = stats[label, cv2.CC_STAT_AREA]
+    outlines, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    found = []
+    for outline in outlines:
+        m = cv2.moments(outline)
+        # the polygon through the boundary pixels' centres misses half a pixel all round
+        area = m["m00"] + 0.5 * cv2.arcLength(outline, True) + 1.0
         if area < min_area:
             continue
-        x, y = stats[label, cv2.CC_STAT_LEFT], stats[label, cv2.CC_STAT_TOP]
-        w, h = stats[label, cv2.CC_STAT_WIDTH], stats[label, cv2.CC_STAT_HEIGHT]
-        # one pixel around the region too: its soft edge counts in proportion
-        x0, y0 = max(x - 1, 0), max(y - 1, 0)
-        x1, y1 = min(x + w + 1, labels.shape[1]), min(y + h + 1, labels.shape[0])
-        inside = cv2.dilate((labels[y0:y1, x0:x1] == label).astype(np.uint8),
-                            np.ones((3, 3), np.uint8)) > 0
-        centroid, _, mass, _, _ = region_moments(probability[y0:y1, x0:x1], inside, (x0, y0))
-        blobs.append(Blob(centroid, float(area), mass,
-                          bbox=(int(x), int(y), int(x + w), int(y + h)), label=label))
-    blobs.sort(key=lambda blob: -blob.area)
-    return blobs, labels
+        x, y, w, h = cv2.boundingRect(outline)
+        centroid = (np.array([m["m10"], m["m01"]]) / m["m00"] if m["m00"] > 0
+                    else outline.reshape(-1, 2).mean(axis=0).astype(float))
+        found.append((area, centroid, (x, y, x + w, y + h), outline))
+    found.sort(key=lambda item: -item[0])
+    return [Blob(centroid, float(area), bbox, outline, k)
+            for k, (area, centroid, bbox, outline) in enumerate(found)]
+
+
+def blob_mask(shape: tuple[int, int], blobs: list[Blob], grow: int = 1) -> np.ndarray:
+    """Bool mask (shape) of the areas the blobs' outlines enclose, grown by ``grow`` pixels
+    (so that the soft edge just outside the threshold counts too)."""
+    mask = np.zeros(shape, np.uint8)
+    cv2.drawContours(mask, [blob.outline for blob in blobs], -1, 1, thickness=-1)
+    if grow > 0:
+        mask = cv2.dilate(mask, np.ones((2 * grow + 1, 2 * grow + 1), np.uint8))
+    return mask > 0
 
 
 def region_moments(probability: np.ndarray, inside: np.ndarray, origin: tuple[float, float],

@@ -33,7 +33,7 @@ from wipelab.vision.acquisition import (AcquisitionParams, CandidateTrack, Candi
                                         StereoCandidate, stereo_candidates, triangulate_rays)
 from wipelab.vision.calibration import StereoCalibration
 from wipelab.vision.colour_model import ColourModel, ColourSource
-from wipelab.vision.colour_regions import find_blobs, prior_model, region_moments
+from wipelab.vision.colour_regions import blob_mask, find_blobs, prior_model, region_moments
 from wipelab.vision.projection import invert_transform
 from wipelab.vision.static_background import StaticBackground
 from wipelab.vision.table_plane import Plane, fit_plane, points_on_plane
@@ -262,10 +262,9 @@ class RegionTracker:
         s = self.search_scale
         blobs, rays = [], []
         for view, frame in zip(self.views, frames):
-            small = cv2.resize(frame, None, fx=s, fy=s, interpolation=cv2.INTER_AREA) \
+            small = cv2.resize(frame, None, fx=s, fy=s, interpolation=cv2.INTER_LINEAR) \
                 if s < 1.0 else frame
-            found, _ = find_blobs(model.back_project(small), min_area=max(6.0, 1500 * s * s
-                                                                         * 0.01))
+            found = find_blobs(model.back_project(small), min_area=max(6.0, 15.0 * s * s))
             found = found[:12]
             blobs.append(found)
             centres = np.array([(b.centroid + 0.5) / s - 0.5 for b in found]).reshape(-1, 2)
@@ -291,12 +290,12 @@ class RegionTracker:
         for view, frame in zip(self.views, frames):
             window, origin = self._window(view, frame, point, 2.0 * self.size)
             probability = self.prior.back_project(window)
-            blobs, labels = find_blobs(probability, min_area=4)
+            blobs = find_blobs(probability, min_area=4)
             centre = view.pixel(point) - origin
             mask = np.zeros(window.shape[:2], np.uint8)
             if blobs:
                 nearest = min(blobs, key=lambda b: np.linalg.norm(b.centroid - centre))
-                mask[labels == nearest.label] = 255
+                mask[blob_mask(mask.shape, [nearest], grow=0)] = 255
             masks.append(mask)
             windows.append(window)
         if all(mask.any() for mask in masks):
@@ -353,12 +352,9 @@ class RegionTracker:
 
     def _update_backgrounds(self, frames, keep_out: list) -> None:
         """Blend the frames into the static backgrounds, except where the sponge's regions
-        are (per camera: (mask, origin, step) or None)."""
-        s = self.search_scale
+        are (per camera: (mask, origin, step))."""
         for background, frame, region in zip(self.backgrounds, frames, keep_out):
-            small = cv2.resize(frame, None, fx=s, fy=s, interpolation=cv2.INTER_AREA) \
-                if s < 1.0 else frame
-            background.update(small, s, self.model, [region])
+            background.update(frame, self.model, [region])
 
     def _region(self, view: _View, frame: np.ndarray, point: np.ndarray, slack: float,
                 background: StaticBackground | None = None):
@@ -372,24 +368,22 @@ class RegionTracker:
         window, origin = self._window(view, frame, point, p.window_size * self.size + slack,
                                       step)
         probability = self.model.back_project(window)
-        if background is not None and background.updates:
+        if background is not None:
             # the sponge's colour where the scene showed it while the sponge was elsewhere,
             # unchanged: a still thing of its colour (a cloth, a stain), not the sponge
-            probability[background.still_colour(window, origin, step)] = 0.0
+            still = background.still_colour(window, origin, step)
+            if still is not None:
+                probability[still] = 0.0
         scale = pixels_per_metre / step  # window pixels per metre
-        blobs, labels = find_blobs(probability, min_area=max(4.0, 0.05 * (self.size * scale) ** 2))
-        if not blobs:
-            return None
+        blobs = find_blobs(probability, min_area=max(4.0, 0.05 * (self.size * scale) ** 2))
         centre = (view.pixel(point) - origin) / step
         reach = (0.8 * self.size + slack) * scale
-        chosen = [b.label for b in blobs if np.linalg.norm(b.centroid - centre) < reach + b.radius]
+        chosen = [b for b in blobs if np.linalg.norm(b.centroid - centre) < reach + b.radius]
         if not chosen:
             return None
-        keep = np.zeros(int(labels.max()) + 1, np.uint8)
-        keep[chosen] = 1
-        inside = cv2.dilate(keep[labels], np.ones((3, 3), np.uint8)) > 0
-        centroid, _, _, axis, _ = region_moments(probability, inside, tuple(origin), step)
-        area = float(sum(b.area for b in blobs if b.label in chosen)) * step * step
+        inside = blob_mask(probability.shape, chosen)
+        centroid, _, mass, axis, _ = region_moments(probability, inside, tuple(origin), step)
+        area = mass * step * step  # sponge pixels (soft), canvas units
         rays = view.rays_of_pixels(np.stack([centroid, centroid + 10.0 * axis]))
         return rays[0], area, rays[1], (inside, origin, step)
 

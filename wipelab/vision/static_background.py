@@ -55,32 +55,33 @@ class StaticBackground:
         self.map_v = cv2.remap(full_v, grid_x, grid_y, cv2.INTER_LINEAR,
                                borderMode=cv2.BORDER_CONSTANT, borderValue=-1e4)
         shape = (self.size[1], self.size[0])
+        # background pixels that see the frame at all (a wide-angle canvas has empty corners)
+        frame_width, frame_height = undistorter.frame_size
+        self.in_frame = ((self.map_u >= 0) & (self.map_v >= 0) & (self.map_u <= frame_width - 1)
+                         & (self.map_v <= frame_height - 1)).astype(np.float32)
         # running sums weighted like an exponential mean; divided by ``seen`` when read
         self.image = np.zeros(shape + (3,), np.float32)
         self.colour = np.zeros(shape, np.float32)
         self.seen = np.zeros(shape, np.float32)
         self.updates = 0
 
-    def update(self, frame: np.ndarray, frame_scale: float, model: ColourModel,
+    def update(self, frame: np.ndarray, model: ColourModel,
                keep_out: list[tuple[np.ndarray, np.ndarray, int]]) -> None:
         """Learn from a frame everywhere but where the sponge is.
 
         Parameters
         ----------
         frame : ndarray
-            The camera's frame (BGR uint8) at ``frame_scale`` times full resolution (a
-            reduced copy saves time).
-        frame_scale : float
+            The camera's frame, BGR uint8, full resolution.
         model : ColourModel
             The sponge's colour.
         keep_out : list of (mask, origin (2,), step)
             Where the sponge is: bool masks of canvas windows (pixel (i, j) at canvas
             ``origin + step (j, i)``), grown by a pixel of the background.
         """
-        small = cv2.remap(frame, self.map_u * frame_scale, self.map_v * frame_scale,
-                          cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
-        weight = np.full(small.shape[:2], self.rate, np.float32)
-        weight[small.max(axis=2) == 0] = 0.0  # outside the frame
+        small = cv2.remap(frame, self.map_u, self.map_v, cv2.INTER_LINEAR,
+                          borderMode=cv2.BORDER_CONSTANT)
+        weight = self.rate * self.in_frame
         for mask, origin, step in keep_out:
             x0, y0, x1, y1 = self._bounds(origin, mask.shape, step)
             if x1 > x0 and y1 > y0:
@@ -93,6 +94,11 @@ class StaticBackground:
         self.colour += weight * (colour - self.colour)
         self.seen += weight * (1.0 - self.seen)
         self.updates += 1
+        # what windows read: the background's colours and where a still thing of the
+        # sponge's colour is
+        seen = np.maximum(self.seen, 1e-6)
+        self.mean = np.clip(self.image / seen[..., None], 0, 255).astype(np.uint8)
+        self.still = ((self.seen > 0.3) & (self.colour > 0.5 * seen)).astype(np.uint8)
 
     def _bounds(self, origin, shape, step) -> tuple[int, int, int, int]:
         """Background pixels covering a canvas window."""
@@ -103,25 +109,26 @@ class StaticBackground:
         y1 = min(int(np.ceil((origin[1] + height * step) * self.scale)), self.size[1])
         return x0, y0, x1, y1
 
-    def still_colour(self, window: np.ndarray, origin: np.ndarray, step: int) -> np.ndarray:
+    def still_colour(self, window: np.ndarray, origin: np.ndarray, step: int
+                     ) -> np.ndarray | None:
         """Pixels of a canvas window (BGR uint8, pixel (i, j) at canvas
         ``origin + step (j, i)``) where a still thing of the sponge's colour shows as it
-        always did: bool, window shape."""
+        always did: bool, window shape; None when there is no such thing in the window."""
+        if not self.updates:
+            return None
+        x0, y0, x1, y1 = self._bounds(origin, window.shape, step)
+        if x1 <= x0 or y1 <= y0 or not self.still[y0:y1, x0:x1].any():
+            return None
         height, width = window.shape[:2]
         s = self.scale
         transform = np.array([[step * s, 0.0, (origin[0] + 0.5) * s - 0.5],
                               [0.0, step * s, (origin[1] + 0.5) * s - 0.5]], np.float32)
-
-        def warp(image):
-            return cv2.warpAffine(image, transform, (width, height),
-                                  flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                                  borderMode=cv2.BORDER_REPLICATE)
-
-        seen = np.maximum(warp(self.seen), 1e-6)
-        known = seen > 0.3
-        if not known.any():
-            return known
-        colour = warp(self.colour) / seen
-        background = warp(self.image) / seen[..., None]
-        difference = np.abs(window.astype(np.float32) - background).max(axis=2)
-        return known & (colour > 0.5) & (difference < self.difference)
+        flags = cv2.WARP_INVERSE_MAP | cv2.INTER_LINEAR
+        still = cv2.warpAffine(self.still, transform, (width, height),
+                               flags=cv2.WARP_INVERSE_MAP | cv2.INTER_NEAREST)
+        background = cv2.warpAffine(self.mean, transform, (width, height), flags=flags,
+                                    borderMode=cv2.BORDER_REPLICATE)
+        difference = cv2.absdiff(window, background)
+        b, g, r = cv2.split(difference)
+        largest = cv2.max(cv2.max(b, g), r)
+        return (still > 0) & (largest < self.difference)

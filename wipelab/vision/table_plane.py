@@ -169,29 +169,33 @@ def points_on_plane(plane: Plane, rays: list[np.ndarray], cameras: list[tuple[np
     for ray, (R, t, _) in zip(rays, cameras):
         eye = -R.T @ t
         starts.append(plane.intersect(np.broadcast_to(eye, (n, 3)), ray @ R))
-    start = np.nanmean(np.stack(starts), axis=0) if len(starts) > 1 else starts[0]
-    ab = np.column_stack([(start - origin) @ e1, (start - origin) @ e2])
+    with np.errstate(invalid="ignore"):
+        start = np.nanmean(np.stack(starts), axis=0) if len(starts) > 1 else starts[0]
+    a, b = (start - origin) @ e1, (start - origin) @ e2
     for _ in range(iterations):
-        X = origin + ab[:, :1] * e1 + ab[:, 1:] * e2
-        normal_matrix = np.zeros((n, 2, 2))
-        gradient = np.zeros((n, 2))
+        X = origin + a[:, None] * e1 + b[:, None] * e2
+        # normal equations of the 2 x 2 least squares, summed over the cameras
+        aa, ab, bb, ga, gb = (np.zeros(n) for _ in range(5))
         for ray, (R, t, focal) in zip(rays, cameras):
-            seen = np.all(np.isfinite(ray), axis=1)
+            seen = np.isfinite(ray[:, 0])
             camera = X @ R.T + t
             z = camera[:, 2]
-            residual = focal * (camera[:, :2] / z[:, None] - ray[:, :2])
-            # d(projection)/d(camera point), then through the plane's basis
+            x, y = camera[:, 0] / z, camera[:, 1] / z
+            residual_x = np.where(seen, focal * (x - ray[:, 0]), 0.0)
+            residual_y = np.where(seen, focal * (y - ray[:, 1]), 0.0)
+            weight = np.where(seen, focal / z, 0.0)
             d1, d2 = R @ e1, R @ e2
-            J = np.empty((n, 2, 2))
-            for column, d in enumerate((d1, d2)):
-                J[:, 0, column] = focal * (d[0] - camera[:, 0] / z * d[2]) / z
-                J[:, 1, column] = focal * (d[1] - camera[:, 1] / z * d[2]) / z
-            J[~seen] = 0.0
-            residual[~seen] = 0.0
-            normal_matrix += np.einsum("nki,nkj->nij", J, J)
-            gradient += np.einsum("nki,nk->ni", J, residual)
-        solvable = np.abs(np.linalg.det(normal_matrix)) > 1e-12
-        step = np.zeros((n, 2))
-        step[solvable] = np.linalg.solve(normal_matrix[solvable], gradient[solvable][..., None])[..., 0]
-        ab -= step
-    return origin + ab[:, :1] * e1 + ab[:, 1:] * e2
+            # d(projection)/d(a), d(projection)/d(b), in pixels
+            ja_x, ja_y = weight * (d1[0] - x * d1[2]), weight * (d1[1] - y * d1[2])
+            jb_x, jb_y = weight * (d2[0] - x * d2[2]), weight * (d2[1] - y * d2[2])
+            aa += ja_x * ja_x + ja_y * ja_y
+            ab += ja_x * jb_x + ja_y * jb_y
+            bb += jb_x * jb_x + jb_y * jb_y
+            ga += ja_x * residual_x + ja_y * residual_y
+            gb += jb_x * residual_x + jb_y * residual_y
+        determinant = aa * bb - ab * ab
+        solvable = np.abs(determinant) > 1e-12
+        safe = np.where(solvable, determinant, 1.0)
+        a = a - np.where(solvable, (bb * ga - ab * gb) / safe, 0.0)
+        b = b - np.where(solvable, (aa * gb - ab * ga) / safe, 0.0)
+    return origin + a[:, None] * e1 + b[:, None] * e2

@@ -40,6 +40,7 @@ class Undistorter:
         self.K[:2, 2] -= low
         self.size = tuple(int(v) for v in np.minimum(high - low + 1, 3 * np.array(size)))
         self.K_distorted, self.D = K, D
+        self.frame_size = (int(width), int(height))
         map_u, map_v = cv2.initUndistortRectifyMap(K, D, None, self.K, self.size, cv2.CV_32FC1)
         # fixed-point maps (1/32 pixel) make the per-frame resampling several times faster
         self.map_xy, self.map_fraction = cv2.convertMaps(map_u, map_v, cv2.CV_16SC2)
