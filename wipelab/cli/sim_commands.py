@@ -10,13 +10,13 @@ from pathlib import Path
 
 import click
 
-from wipelab.cli.options import PATH, comma_separated
+from wipelab.cli.options import OUTPUT_DIR, PATH, comma_separated
 
 
 
 def _common(function):
     options = [
-        click.option("-o", "--output", "out_dir", type=PATH, required=True,
+        click.option("-o", "--output", "out_dir", type=OUTPUT_DIR, required=True,
                      help="Output directory."),
         click.option("--surface", default=None, metavar="NAME|FILE.toml",
                      help="flat, bowl, sink or a surface TOML file."),
