@@ -72,10 +72,18 @@ class _WipelabGroup(click.Group):
         except InputError as error:
             click.echo(f"error: {error}", err=True)
             ctx.exit(2)
+        except (KeyboardInterrupt, click.exceptions.Abort):
+            self._interrupted(ctx)
         except SystemError as error:
             if from_user_interrupt(error):
-                raise KeyboardInterrupt from None
+                self._interrupted(ctx)
             raise
+
+    @staticmethod
+    def _interrupted(ctx: click.Context) -> None:
+        """Ctrl-C: one line and exit code 130; a stage's files appear only when it finishes."""
+        click.echo("interrupted: no output of the unfinished work was written", err=True)
+        ctx.exit(130)
 
 
 @click.group(cls=_WipelabGroup, context_settings={"help_option_names": ["-h", "--help"]})
