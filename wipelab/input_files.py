@@ -47,6 +47,15 @@ def reading(path: str | os.PathLike, what: str) -> Iterator[None]:
         raise InputError(f"{path}: {what} ({_describe(error)})") from None
 
 
+def check_readable(path: str | os.PathLike) -> Path:
+    """``path`` as a Path if it is a file the user may read, else InputError naming it (for
+    files a library opens by name, whose own errors do not tell a missing or unreadable
+    file from a broken one)."""
+    with reading(path, "cannot be read"), open(path, "rb"):
+        pass
+    return Path(path)
+
+
 def read_input_text(path: str | os.PathLike, encoding: str = "utf-8") -> str:
     """The text of an input file.
 

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from reliability_testdata import error_line, invoke, tree
+from reliability_testdata import error_line, invoke, run_process, tree
 
 Setup = Callable[[Path], None]
 
@@ -437,3 +437,24 @@ def test_every_command_has_bad_input_cases():
 
     missing = set(cli.list_commands(None)) - {case.command for case in CASES}
     assert not missing, f"add bad-input cases for {', '.join(sorted(missing))}"
+
+
+@pytest.mark.parametrize("argv, names", [
+    (["learn", "secret.csv", "-o", "open/out"], "secret.csv"),
+    (["rollout", "secret.json", "-o", "open/r.csv"], "secret.json"),
+    (["track", "demo_calibration", "-o", "open/out"], "demo_calibration/calibration.yaml"),
+    (["track", "demo_video", "-o", "open/out"], "demo_video/left.mp4"),
+    (["adapt", "model.json", "-o", "open/out", "--surface", "secret.toml"], "secret.toml"),
+    (["replay", "secret.json", "-o", "open/out"], "secret.json"),
+    (["run", "p.toml", "-o", "open/run"], "secret.csv"),
+    (["view", "secret.rrd", "--save", "open/joined.rrd"], "secret.rrd"),
+], ids=lambda value: value[0] if isinstance(value, list) else None)
+def test_a_file_the_user_may_not_read_is_named(argv, names, unprivileged):
+    runner, folder, env = unprivileged
+    before = tree(folder)
+    completed = run_process(argv, folder, runner.prefix, env)
+    assert completed.returncode == 2, completed.stderr
+    error_line(completed.stderr, names, "cannot be read (permission denied)")
+    after = tree(folder)
+    assert after == before, {k: (before.get(k), after.get(k)) for k in before.keys() | after.keys()
+                             if before.get(k) != after.get(k)}

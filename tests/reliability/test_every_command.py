@@ -10,15 +10,12 @@ as ``nobody`` under ``setpriv`` when the tests run as root.
 
 from __future__ import annotations
 
-import shutil
-import stat
-import tempfile
 from pathlib import Path
 
 import click
 import pytest
 
-from reliability_testdata import Unprivileged, error_line, invoke, run_process, tree
+from reliability_testdata import error_line, invoke, run_process, tree
 from wipelab.cli import cli
 from wipelab.cli.options import OutputLocation
 
@@ -90,36 +87,10 @@ def test_an_output_below_a_file_is_refused(name, tmp_path, monkeypatch):
     assert tree(tmp_path) == before
 
 
-@pytest.fixture(scope="module")
-def unprivileged(artefacts):
-    """(how to run as an unprivileged user, a folder it can read: ``locked/`` it may not
-    write in, ``open/`` it may, and a learn.rrd)."""
-    runner = Unprivileged.find()
-    if runner is None:
-        pytest.skip("running as root without setpriv: no user that permission bits apply to")
-    folder = Path(tempfile.mkdtemp(prefix="wipelab-unprivileged-"))
-    try:
-        (folder / "locked").mkdir()
-        (folder / "locked" / "old.csv").write_text("t,x\n")
-        (folder / "open").mkdir()
-        shutil.copyfile(artefacts / "learn" / "learn.rrd", folder / "learn.rrd")
-        for path in (folder, folder / "locked"):
-            path.chmod(0o755)
-        (folder / "open").chmod(0o777)
-        for path in (folder / "learn.rrd", folder / "locked" / "old.csv"):
-            path.chmod(0o644)
-        if runner.prefix == ():  # not root: take away the write permission instead
-            (folder / "locked").chmod(stat.S_IRUSR | stat.S_IXUSR)
-        yield runner, folder
-    finally:
-        (folder / "locked").chmod(0o755)
-        shutil.rmtree(folder)
-
-
 @pytest.mark.parametrize("name", COMMANDS)
 @pytest.mark.parametrize("where", ["inside", "itself"])
 def test_an_output_the_user_may_not_write_is_refused(name, where, unprivileged):
-    runner, folder = unprivileged
+    runner, folder, env = unprivileged
     kind = output_kind(name)
     if where == "inside":
         output, says = "locked/new/out", "(locked is not writable)"
@@ -128,16 +99,16 @@ def test_an_output_the_user_may_not_write_is_refused(name, where, unprivileged):
     else:
         output, says = "locked/old.csv", "(locked is not writable)"
     before = tree(folder)
-    completed = run_process(command_line(name, output), folder, runner.prefix)
+    completed = run_process(command_line(name, output), folder, runner.prefix, env)
     assert completed.returncode == 2, completed.stderr
     error_line(completed.stderr, output, says)
     assert tree(folder) == before
 
 
 def test_the_unprivileged_user_writes_where_it_may(unprivileged):
-    runner, folder = unprivileged
+    runner, folder, env = unprivileged
     completed = run_process(["view", "learn.rrd", "--save", "open/joined.rrd"], folder,
-                            runner.prefix)
+                            runner.prefix, env)
     assert completed.returncode == 0, completed.stderr
     assert (folder / "open" / "joined.rrd").stat().st_size > 1000
 

@@ -13,7 +13,7 @@ from wipelab.errors import InputError
 from wipelab.output_location import check_output_dir, check_output_file
 
 #: A path argument or option, given to the command as a pathlib.Path.
-PATH = click.Path(path_type=Path)
+PATH = click.Path(path_type=Path, readable=False)
 
 #: Ranges of ``synth`` and ``synth-dataset``: wiping frequency (Hz), length (s), frame rate,
 #: and the number of parallel jobs of ``synth-dataset`` and ``dataset``.
@@ -33,7 +33,7 @@ class OutputLocation(click.Path):
     (:mod:`wipelab.output_location`); a bad one is one line and exit code 2."""
 
     def __init__(self, kind: str):
-        super().__init__(path_type=Path)
+        super().__init__(path_type=Path, readable=False)
         self.kind = kind
 
     def convert(self, value, param, ctx) -> Path:

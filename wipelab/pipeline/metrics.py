@@ -9,12 +9,12 @@ from __future__ import annotations
 
 import fnmatch
 import math
-import tomllib
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from wipelab.input_files import read_input_json
+from wipelab.errors import InputError
+from wipelab.input_files import read_input_json, read_input_toml
 from wipelab.pipeline.cache import read_record
 
 #: Per-stage files whose numbers are collected, and the keys taken from each
@@ -42,8 +42,8 @@ def synthetic_frequency_hz(demo_dir: str | Path) -> float | None:
     """The wiping frequency a synthetic demo was rendered at (``[synth] frequency_hz`` of its
     demo.toml), or None for a recorded demo (or an unreadable demo.toml)."""
     try:
-        synth = tomllib.loads((Path(demo_dir) / "demo.toml").read_text()).get("synth", {})
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        synth = read_input_toml(Path(demo_dir) / "demo.toml").get("synth", {})
+    except InputError:
         return None
     value = synth.get("frequency_hz") if isinstance(synth, dict) else None
     return float(value) if isinstance(value, (int, float)) else None

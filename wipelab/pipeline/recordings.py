@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from wipelab.errors import InputError
+from wipelab.input_files import check_readable
 from wipelab.stage_output import staged_file
 
 #: Recording id of a joined recording.
@@ -67,7 +68,7 @@ def join_recordings(recordings: Sequence[Path], out: str | os.PathLike) -> Path:
     chunks, application_id = [], "wipelab"
     for path in recordings:
         try:
-            reader = RrdReader(path)
+            reader = RrdReader(check_readable(path))
             stores = reader.recordings()
             if stores:
                 application_id = stores[0].application_id

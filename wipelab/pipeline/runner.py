@@ -34,6 +34,7 @@ from pathlib import Path
 
 import wipelab
 from wipelab.errors import InputError
+from wipelab.input_files import reading
 from wipelab.output_location import check_output_dir
 from wipelab.pipeline.cache import (DigestMemo, StageRecord, code_files_in_use, package_root,
                                     read_record, remove_record, stage_key, write_record)
@@ -148,7 +149,8 @@ def _stage_input(pipeline: Pipeline, stage: StageSpec, run_dir: Path,
         raise InputError(f"{pipeline.source}: stage {stage.name}: input {stage.input!r} "
                          f"({path}) not found")
     argument = path.relative_to(run_dir).as_posix() if path.is_relative_to(run_dir) else str(path)
-    return argument, memo.content(path)
+    with reading(path, "cannot be read"):
+        return argument, memo.content(path)
 
 
 def _keyed_parameters(pipeline: Pipeline, stage: StageSpec, memo: DigestMemo) -> dict:
@@ -161,9 +163,11 @@ def _keyed_parameters(pipeline: Pipeline, stage: StageSpec, memo: DigestMemo) ->
         elif not path.is_file():
             raise InputError(f"{pipeline.source}: stage {stage.name}: {key}: {path} not found")
         else:  # a surface TOML names its heightfield beside it: the folder is the content
-            keyed[key] = {"file": path.name, "sha256": memo.file(path),
-                          "beside": {p.name: memo.file(p) for p in sorted(path.parent.iterdir())
-                                     if p.is_file() and not p.name.startswith(".")}}
+            with reading(path, "cannot be read"):
+                keyed[key] = {"file": path.name, "sha256": memo.file(path),
+                              "beside": {p.name: memo.file(p)
+                                         for p in sorted(path.parent.iterdir())
+                                         if p.is_file() and not p.name.startswith(".")}}
     return keyed
 
 

@@ -13,13 +13,13 @@ import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from fractions import Fraction
-from pathlib import Path
 
 import av
 import cv2
 import numpy as np
 
 from wipelab.errors import InputError
+from wipelab.input_files import check_readable
 
 
 @dataclass(frozen=True)
@@ -41,9 +41,7 @@ def probe_video(path: str | os.PathLike) -> VideoInfo:
     InputError
         Missing file, a file OpenCV cannot decode, no frames, or no frame rate.
     """
-    name = str(path)
-    if not Path(path).is_file():
-        raise InputError(f"{name}: file not found")
+    name = str(check_readable(path))
     capture = cv2.VideoCapture(name, cv2.CAP_FFMPEG)
     try:
         if not capture.isOpened():
