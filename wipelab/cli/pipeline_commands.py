@@ -138,11 +138,12 @@ def synth_dataset(out_dir: Path, patterns: tuple[str, ...], frequencies_hz: tupl
     """
     from tqdm import tqdm
 
-    from wipelab.pipeline.synth_grid import grid_points, synth_grid
+    from wipelab.pipeline.synth_grid import grid_points, missing_points, synth_grid
 
     points = grid_points(patterns, frequencies_hz, seeds)
-    with tqdm(total=len(points), unit="demo", desc="synth-dataset", disable=quiet) as bar:
-        bar.update(sum((out_dir / p.name / "manifest.json").is_file() for p in points))
+    done = len(points) - len(missing_points(out_dir, points))
+    with tqdm(total=len(points), initial=done, unit="demo", desc="synth-dataset",
+              disable=quiet) as bar:
         demos = synth_grid(out_dir, points, duration, fps, jobs=jobs,
                            on_done=lambda path: bar.update(1))
     click.echo(f"{len(demos)} demos in {out_dir}")
