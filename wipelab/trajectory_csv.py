@@ -65,6 +65,11 @@ class Trajectory:
         return np.column_stack([self.columns[name] for name in names])
 
 
+#: Largest magnitude of a value: the seconds and metres of a recording stay far below it,
+#: and sums of squares of larger ones overflow float64.
+MAX_MAGNITUDE = 1e9
+
+
 def read_trajectory(path: str | os.PathLike, required: Sequence[str] = ("t", "x", "y"),
                     min_rows: int = 3) -> Trajectory:
     """Read and validate a Trajectory CSV.
@@ -82,8 +87,8 @@ def read_trajectory(path: str | os.PathLike, required: Sequence[str] = ("t", "x"
     ------
     InputError
         Naming the file: missing/unreadable, no or bad header, missing columns, a value that is
-        not a number, NaN/inf (outside rows flagged ``valid = 0``), fewer than ``min_rows``
-        rows, time not strictly increasing.
+        not a number, NaN/inf or a magnitude above :data:`MAX_MAGNITUDE` (outside rows
+        flagged ``valid = 0``), fewer than ``min_rows`` rows, time not strictly increasing.
     """
     name = str(path)
     text = read_input_text(path, encoding="utf-8-sig")
@@ -132,11 +137,17 @@ def read_trajectory(path: str | os.PathLike, required: Sequence[str] = ("t", "x"
         if not valid.any():
             raise InputError(f"{name}: no row has {VALID_COLUMN} = 1")
     for column, values in {"t": t, **columns}.items():
-        checked = values if column == "t" else values[valid]
+        rows = np.arange(t.size) if column == "t" else np.flatnonzero(valid)
+        checked = values[rows]
         bad = ~np.isfinite(checked)
         if bad.any():
-            row = int(np.flatnonzero(bad)[0]) if column == "t" else int(np.flatnonzero(valid)[bad][0])
-            raise InputError(f"{name}: column {column} has NaN or inf (data row {row + 1})")
+            raise InputError(f"{name}: column {column} has NaN or inf "
+                             f"(data row {rows[bad][0] + 1})")
+        huge = np.abs(checked) > MAX_MAGNITUDE
+        if huge.any():
+            raise InputError(f"{name}: column {column} holds {checked[huge][0]:g} (data row "
+                             f"{rows[huge][0] + 1}); seconds and metres of a recording stay "
+                             f"within +-{MAX_MAGNITUDE:g}")
     steps = np.diff(t)
     if np.any(steps <= 0):
         row = int(np.flatnonzero(steps <= 0)[0]) + 2

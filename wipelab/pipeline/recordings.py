@@ -15,6 +15,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from wipelab.errors import InputError
+from wipelab.input_files import check_readable
+from wipelab.stage_output import staged_file
 
 #: Recording id of a joined recording.
 JOINED_RECORDING_ID = "wipelab-run"
@@ -58,7 +60,7 @@ def join_recordings(recordings: Sequence[Path], out: str | os.PathLike) -> Path:
     one chunk per id, so every chunk gets a fresh id here (``Chunk.with_entity_path`` mints
     one; rows, timelines and components are kept). The stages' own blueprints are left out
     (each lays out one stage); the viewer arranges the joined recording by itself. Written
-    under a temporary name, then renamed.
+    all or nothing (:func:`~wipelab.stage_output.staged_file`).
     """
     from rerun.chunk import ChunkStore, RrdReader
 
@@ -66,7 +68,7 @@ def join_recordings(recordings: Sequence[Path], out: str | os.PathLike) -> Path:
     chunks, application_id = [], "wipelab"
     for path in recordings:
         try:
-            reader = RrdReader(path)
+            reader = RrdReader(check_readable(path))
             stores = reader.recordings()
             if stores:
                 application_id = stores[0].application_id
@@ -74,13 +76,9 @@ def join_recordings(recordings: Sequence[Path], out: str | os.PathLike) -> Path:
                            for chunk in reader.stream(store=stores[0]).to_chunks()]
         except (RuntimeError, ValueError) as error:
             raise InputError(f"{path}: not a readable Rerun recording ({error})") from None
-    tmp = out.with_name(f".{out.name}.partial-{os.getpid()}")
-    try:
+    with staged_file(out) as tmp:
         ChunkStore.from_chunks(chunks).write_rrd(tmp, application_id=application_id,
                                                  recording_id=JOINED_RECORDING_ID)
-        os.replace(tmp, out)
-    finally:
-        tmp.unlink(missing_ok=True)
     return out
 
 

@@ -23,7 +23,6 @@ from __future__ import annotations
 import os
 import sys
 import tempfile
-import tomllib
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -34,6 +33,7 @@ import rerun.blueprint as rrb
 from tqdm import tqdm
 
 from wipelab.errors import InputError
+from wipelab.input_files import read_input_toml
 from wipelab.logs import StageRecorder
 from wipelab.manifest import build_manifest, write_json
 from wipelab.stage_output import staged_output
@@ -166,10 +166,7 @@ def open_demo(demo_dir: str | os.PathLike) -> Demo:
     metadata = {}
     toml_path = demo / "demo.toml"
     if toml_path.is_file():
-        try:
-            metadata = tomllib.loads(toml_path.read_text(encoding="utf-8"))
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-            raise InputError(f"{toml_path}: not valid TOML ({error})") from None
+        metadata = read_input_toml(toml_path)
     return Demo(left, right, calibration_path, calibration, reader, metadata)
 
 
