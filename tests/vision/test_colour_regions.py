@@ -49,7 +49,7 @@ def test_blob_centroid_is_sub_pixel_and_regions_are_separated():
     expected = (np.array(centre) + 0.5) / scale - 0.5
     assert np.linalg.norm(disc.centroid - expected) < 0.1  # the outline's polygon
     assert abs(disc.area - np.pi * 12 ** 2) < 0.03 * np.pi * 12 ** 2
-    inside = blob_mask(probability.shape, [disc])
+    inside = blob_mask(probability, [disc])
     assert inside[50, 40] and not inside[30, 110]
     # the soft moments over the grown outline find the centre to a fiftieth of a pixel
     centroid, area, mass, axis, elongation = region_moments(probability, inside, (0.0, 0.0))

@@ -167,7 +167,7 @@ def _pinhole(points: np.ndarray, K: np.ndarray) -> np.ndarray:
     return points[:, :2] / points[:, 2:3] * [K[0, 0], K[1, 1]] + K[:2, 2]
 
 
-@dataclass
+@dataclass(eq=False)
 class CandidateTrack:
     """One object followed over frames.
 

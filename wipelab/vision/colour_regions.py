@@ -96,11 +96,14 @@ def find_blobs(probability: np.ndarray, min_area: float, threshold: float = 0.5,
             for k, (area, centroid, bbox, outline) in enumerate(found)]
 
 
-def blob_mask(shape: tuple[int, int], blobs: list[Blob], grow: int = 1) -> np.ndarray:
-    """Bool mask (shape) of the areas the blobs' outlines enclose, grown by ``grow`` pixels
-    (so that the soft edge just outside the threshold counts too)."""
-    mask = np.zeros(shape, np.uint8)
+def blob_mask(probability: np.ndarray, blobs: list[Blob], grow: int = 1,
+              threshold: float = 0.5) -> np.ndarray:
+    """Bool mask of the blobs' pixels: those above ``threshold`` inside their outlines (a
+    hole, such as a hand on the sponge, stays out), grown by ``grow`` pixels (so that the
+    soft edge just outside the threshold counts too)."""
+    mask = np.zeros(probability.shape, np.uint8)
     cv2.drawContours(mask, [blob.outline for blob in blobs], -1, 1, thickness=-1)
+    mask &= (probability > threshold).astype(np.uint8)
     if grow > 0:
         mask = cv2.dilate(mask, np.ones((2 * grow + 1, 2 * grow + 1), np.uint8))
     return mask > 0

@@ -73,6 +73,12 @@ class RegionTrackerParams:
         Valid frames between refreshes of the colour model (follows the lighting).
     background_every : int
         Frames between updates of the static background (:mod:`.static_background`).
+    table_pairs : int
+        Frame pairs whose dense stereo measures the table (one when the sponge is found, the
+        others every ``table_every`` valid frames after it): more pairs, a steadier plane.
+    table_every : int
+    table_radius : float
+        The table is measured within this distance of the sponge, metres.
     """
 
     search_width: int = 320
@@ -84,7 +90,10 @@ class RegionTrackerParams:
     coast_frames: int = 6
     acquisition: AcquisitionParams = AcquisitionParams()
     colour_refresh: int = 60
-    background_every: int = 3
+    background_every: int = 6
+    table_pairs: int = 6
+    table_every: int = 15
+    table_radius: float = 0.5
 
 
 @dataclass
@@ -176,8 +185,8 @@ class RegionTracker:
         size = calibration.image_size
         self.views = [_View(calibration.K1, calibration.D1, np.eye(4), size),
                       _View(calibration.K2, calibration.D2, calibration.right.T_cam_ref, size)]
-        self.search_scale = min(1.0, params.search_width / max(size))
-        self.backgrounds = [StaticBackground(view.undistorter, self.search_scale)
+        search_scale = min(1.0, params.search_width / max(size))
+        self.backgrounds = [StaticBackground(view.undistorter, search_scale)
                             for view in self.views]
         self.prior = prior_model(colour.hsv_range) if colour.hsv_range is not None else None
         self.model: ColourModel | None = None
@@ -191,19 +200,24 @@ class RegionTracker:
         # what is known about the sponge once found
         self.size: float | None = None
         self.table: Plane | None = None
-        self.plane_heights: deque[float] = deque(maxlen=900)
+        self._table_points: list[np.ndarray] = []  # dense stereo points of the table pairs
+        self._table_centre: np.ndarray | None = None
         self.ray_offsets: deque[np.ndarray] = deque(maxlen=90)
         self.areas = [deque(maxlen=45), deque(maxlen=45)]  # metric areas of valid frames
         self.history: deque[tuple[int, np.ndarray]] = deque(maxlen=3)
         self.failures = 0
         self.valid_count = 0
         self.frames_with_candidates = 0  # before identification: frames showing the colour
-        self._stereo_points: list[np.ndarray] = []
-        self._fitted: Plane | None = None
+        self._stereo_points: deque[np.ndarray] = deque(maxlen=900)
+        self._plane: Plane | None = None
         # the sponge's pixels in both cameras when it was identified (window images, 0/255
         # masks): what colour models are learnt from
         self.seed_windows: list[np.ndarray] = []
         self.seed_masks: list[np.ndarray] = []
+        # before the sponge is known: per camera, the last frames in the background's
+        # pixels and where they show the colour (to find still things of the colour)
+        window = params.acquisition.window
+        self._recent = [deque(maxlen=window), deque(maxlen=window)]
 
     # ----------------------------------------------------------------- public
     @property
@@ -235,9 +249,8 @@ class RegionTracker:
                 return self._invalid("the colour does not show")
             track = self._follow_candidates(frames, self.prior if self.model is None
                                             else self.model)
-            if track is None:
+            if track is None or not self._identify(frames, track):
                 return self._invalid("searching for the moving sponge")
-            self._identify(frames, track)
         elif not self.history and self.failures > self.params.coast_frames:
             candidate = self._reacquire(frames)
             if candidate is None:
@@ -257,54 +270,88 @@ class RegionTracker:
         self.prior = ColourModel.fit([frames[0]], [roi])
         return True
 
-    def _search_candidates(self, frames, model: ColourModel) -> list[StereoCandidate]:
-        """Stereo candidates of the sponge's colour anywhere in both (scaled) images."""
-        s = self.search_scale
+    def _search_candidates(self, frames, model: ColourModel, images=None
+                           ) -> list[StereoCandidate]:
+        """Stereo candidates of the sponge's colour anywhere in both images, found in the
+        backgrounds' low-resolution undistorted canvases (``images``, or resampled from
+        ``frames``), without the still things of its colour the backgrounds know."""
+        if images is None:
+            images = [background.canvas_image(frame)
+                      for background, frame in zip(self.backgrounds, frames)]
         blobs, rays = [], []
-        for view, frame in zip(self.views, frames):
-            small = cv2.resize(frame, None, fx=s, fy=s, interpolation=cv2.INTER_LINEAR) \
-                if s < 1.0 else frame
-            found = find_blobs(model.back_project(small), min_area=max(6.0, 15.0 * s * s))
-            found = found[:12]
+        for view, background, image in zip(self.views, self.backgrounds, images):
+            probability = model.back_project(image)
+            still = background.still_in_canvas_image(image)
+            if still is not None:
+                probability[still] = 0.0
+            scale = background.scale
+            found = find_blobs(probability, min_area=max(6.0, 15.0 * scale * scale))[:12]
             blobs.append(found)
-            centres = np.array([(b.centroid + 0.5) / s - 0.5 for b in found]).reshape(-1, 2)
-            rays.append(view.rays_of_distorted(centres))
+            centres = background.canvas_pixels([b.centroid for b in found]).reshape(-1, 2)
+            rays.append(view.rays_of_pixels(centres))
         c = self.calibration
         return stereo_candidates(blobs[0], blobs[1], rays[0], rays[1], c.R, c.T,
-                                 (self.views[0].focal, self.views[1].focal), s,
-                                 self.views[0].K, self.views[1].K)
+                                 (self.views[0].focal, self.views[1].focal),
+                                 self.backgrounds[0].scale, self.views[0].K, self.views[1].K)
 
     def _follow_candidates(self, frames, model: ColourModel) -> CandidateTrack | None:
-        candidates = self._search_candidates(frames, model)
+        images = [background.canvas_image(frame)
+                  for background, frame in zip(self.backgrounds, frames)]
+        for image, recent in zip(images, self._recent):
+            recent.append((self.frame, image, model.back_project(image) > 0.5))
+        candidates = self._search_candidates(frames, model, images)
         self.frames_with_candidates += bool(candidates)
         self.candidates.update(self.frame, candidates)
         return self.candidates.moving(self.frame)
 
-    def _identify(self, frames, track: CandidateTrack) -> None:
-        """The moving candidate is the sponge: learn its size, colour and the table."""
+    def _identify(self, frames, track: CandidateTrack) -> bool:
+        """The moving candidate is the sponge if something of its colour is left where it
+        is once the still things of its colour are taken away (they stayed in place over
+        the last frames; a cloth the sponge touches moves with it in the colour mask only):
+        learn its size, colour and position from its pixels alone, and measure the table.
+        False when nothing is left (the candidate was a still thing and is remembered as
+        one)."""
         self.candidates.static.pop(track.ident, None)  # it may have rested before it moved
-        self.size = track.size
-        point = track.last_point
-        self.history.append((self.frame - 1, point.copy()))
+        if len(self._recent[0]) < self.params.acquisition.window // 2:
+            return False  # too few frames yet to tell still from moving
+        for background, recent in zip(self.backgrounds, self._recent):
+            background.initialise(np.stack([image for _, image, _ in recent]),
+                                  np.stack([positive for _, _, positive in recent]))
+        # follow the candidates of the last frames again, without what stayed still
+        cleaned = CandidateTracks(self.params.acquisition)
+        for (frame, left, _), (_, right, _) in zip(*self._recent):
+            cleaned.update(frame, self._search_candidates(None, self.prior, [left, right]))
+        moving = cleaned.moving(self.frame)
+        if moving is None or np.linalg.norm(moving.last_point - track.last_point) > \
+                max(track.size, 0.05):
+            self.candidates.static[track.ident] = (track.last_point.copy(), track.size)
+            self.candidates.tracks = [t for t in self.candidates.tracks if t is not track]
+            return False
+        for recent in self._recent:
+            recent.clear()
+        point, self.size = moving.last_point, moving.size
         masks, windows = [], []
-        for view, frame in zip(self.views, frames):
-            window, origin = self._window(view, frame, point, 2.0 * self.size)
+        for view, frame, background in zip(self.views, frames, self.backgrounds):
+            window, origin = self._window(view, frame, point, 1.5 * self.size)
             probability = self.prior.back_project(window)
-            blobs = find_blobs(probability, min_area=4)
+            still = background.still_colour(window, origin, 1)
+            if still is not None:
+                probability[still] = 0.0
             centre = view.pixel(point) - origin
+            reach = 0.8 * self.size * view.focal / view.depth(point)
+            blobs = [b for b in find_blobs(probability, min_area=4)
+                     if np.linalg.norm(b.centroid - centre) < reach + b.radius]
             mask = np.zeros(window.shape[:2], np.uint8)
-            if blobs:
-                nearest = min(blobs, key=lambda b: np.linalg.norm(b.centroid - centre))
-                mask[blob_mask(mask.shape, [nearest], grow=0)] = 255
+            mask[blob_mask(probability, blobs, grow=0)] = 255
             masks.append(mask)
             windows.append(window)
-        if all(mask.any() for mask in masks):
-            self.model = ColourModel.fit(windows, masks)
-        else:
-            self.model = self.prior
+        self.model = ColourModel.fit(windows, masks) if all(m.any() for m in masks) \
+            else self.prior
+        self.history.append((self.frame - 1, point.copy()))
         self.seed_windows, self.seed_masks = windows, masks
-        radius = max(0.3, 4.0 * self.size)
-        self.table = self.table_stereo.plane_near([frames], point, radius)
+        self._table_centre = point.copy()
+        self._measure_table(frames)
+        return True
 
     def _reacquire(self, frames) -> StereoCandidate | None:
         """After a loss: a candidate of the sponge's size that is not a static object and
@@ -312,7 +359,7 @@ class RegionTracker:
         candidates = self._search_candidates(frames, self.model)
         self.candidates.update(self.frame, candidates)
         plausible = [c for c in candidates
-                     if 0.6 < c.size / self.size < 1.6
+                     if 0.5 < c.size / self.size < 2.0
                      and not self.candidates.is_static(c.point, c.size)]
         if not plausible:
             return None
@@ -381,7 +428,7 @@ class RegionTracker:
         chosen = [b for b in blobs if np.linalg.norm(b.centroid - centre) < reach + b.radius]
         if not chosen:
             return None
-        inside = blob_mask(probability.shape, chosen)
+        inside = blob_mask(probability, chosen)
         centroid, _, mass, axis, _ = region_moments(probability, inside, tuple(origin), step)
         area = mass * step * step  # sponge pixels (soft), canvas units
         rays = view.rays_of_pixels(np.stack([centroid, centroid + 10.0 * axis]))
@@ -429,21 +476,34 @@ class RegionTracker:
         direction = ends[1] - ends[0]
         return direction / np.linalg.norm(direction)
 
+    def _measure_table(self, frames) -> None:
+        """Add a frame pair's dense stereo points of the table and fit the table again."""
+        self._table_points.append(self.table_stereo.table_points(*frames, self._table_centre))
+        table = self.table_stereo.plane_of_points(np.concatenate(self._table_points),
+                                                  self._table_centre, self.params.table_radius,
+                                                  prior_normal=self.world_up)
+        if table is not None:
+            self.table = table
+            self._refresh_plane(force=True)
+
     def sponge_plane(self) -> Plane | None:
-        """The plane the tracked point moves in: the table's, at the median height of the
-        stereo points so far (None before the first measurement)."""
+        """The plane the tracked point moves in (None before the first measurement): the
+        table's, at the median height of the sponge's stereo points above it."""
+        return self._plane
+
+    def _refresh_plane(self, force: bool = False) -> None:
+        """Recompute :meth:`sponge_plane` from the sponge's stereo points so far: on each of
+        the first 30 valid frames, then on every 10th (and whenever the table changes)."""
+        count = len(self._stereo_points)
+        if count == 0 or (not force and count > 30 and count % 10):
+            return
+        points = np.array(self._stereo_points)
         if self.table is not None:
-            if not self.plane_heights:
-                return None
-            return self.table.shifted(float(np.median(self.plane_heights)))
-        # no table plane (a plain, untextured table): the plane of the sponge's own stereo
-        # points, pulled towards the world's up axis when the calibration has a world frame
-        if len(self._stereo_points) < 30:
-            return None
-        if self._fitted is None or len(self._stereo_points) % 30 == 0:
-            self._fitted = fit_plane(np.array(self._stereo_points[-900:]), towards=np.zeros(3),
-                                     prior_normal=self.world_up)
-        return self._fitted
+            self._plane = self.table.shifted(float(np.median(self.table.distance(points))))
+        elif count >= 30:
+            # no table plane (a plain, untextured table): the plane of the sponge's own
+            # stereo points, pulled towards the world's up axis when there is a world frame
+            self._plane = fit_plane(points, towards=np.zeros(3), prior_normal=self.world_up)
 
     def _locate(self, rays: np.ndarray, stereo: np.ndarray) -> np.ndarray:
         plane = self.sponge_plane()
@@ -477,15 +537,24 @@ class RegionTracker:
 
     def _accept(self, frames, point, rays, areas, stereo) -> None:
         self.history.append((self.frame, point.copy()))
+        # a "still thing" where the sponge is now was the sponge resting before it moved
+        for ident, (centre, _) in list(self.candidates.static.items()):
+            if np.linalg.norm(centre - point) < 0.5 * self.size:
+                del self.candidates.static[ident]
         self.failures = 0
         self.valid_count += 1
         for k in range(2):
             self.areas[k].append(areas[k])
+        if self.valid_count % 30 == 0:
+            # the sponge's size as it is measured now (its first estimate came from a few
+            # low-resolution frames)
+            self.size = float(np.sqrt(np.median(self.areas[0]) + np.median(self.areas[1])) / np.sqrt(2.0))
         if np.all(np.isfinite(stereo)):
-            if self.table is not None:
-                self.plane_heights.append(float(self.table.distance(stereo)))
-            else:
-                self._stereo_points.append(stereo)
+            self._stereo_points.append(stereo)
+            self._refresh_plane()
+        p = self.params
+        if len(self._table_points) < p.table_pairs and self.valid_count % p.table_every == 0:
+            self._measure_table(frames)
         plane = self.sponge_plane()
         if plane is not None:
             self.ray_offsets.append(self._ray_offset(plane, rays))

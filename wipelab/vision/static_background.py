@@ -37,7 +37,7 @@ class StaticBackground:
         this (grey levels).
     """
 
-    def __init__(self, undistorter: Undistorter, scale: float, rate: float = 0.1,
+    def __init__(self, undistorter: Undistorter, scale: float, rate: float = 0.2,
                  difference: float = 24.0):
         self.scale = scale
         self.rate = rate
@@ -63,7 +63,30 @@ class StaticBackground:
         self.image = np.zeros(shape + (3,), np.float32)
         self.colour = np.zeros(shape, np.float32)
         self.seen = np.zeros(shape, np.float32)
+        self.still = np.zeros(shape, np.uint8)
+        self._mean: np.ndarray | None = None
         self.updates = 0
+
+    def canvas_image(self, frame: np.ndarray) -> np.ndarray:
+        """A full-resolution frame (BGR uint8) resampled into the background's pixels."""
+        return cv2.remap(frame, self.map_u, self.map_v, cv2.INTER_LINEAR,
+                         borderMode=cv2.BORDER_CONSTANT)
+
+    def initialise(self, images: np.ndarray, positive: np.ndarray,
+                   persistence: float = 0.5) -> None:
+        """Start from a stack of recent frames (:meth:`canvas_image`, (m, h, w, 3)) and
+        where each showed the sponge's colour ((m, h, w) bool), taken before the sponge
+        was known: the background is their per-pixel median, and the still things of the
+        sponge's colour are where that colour showed in at least ``persistence`` of them
+        (the moving sponge passes; a cloth stays)."""
+        median = np.median(images, axis=0).astype(np.float32)
+        seen = self.in_frame.copy()
+        self.image = median * seen[..., None]
+        self.colour = (positive.mean(axis=0) >= persistence).astype(np.float32) * seen
+        self.seen = seen
+        self.updates += 1
+        self.still = ((self.seen > 0.3) & (self.colour > 0.5 * self.seen)).astype(np.uint8)
+        self._mean = None
 
     def update(self, frame: np.ndarray, model: ColourModel,
                keep_out: list[tuple[np.ndarray, np.ndarray, int]]) -> None:
@@ -79,26 +102,35 @@ class StaticBackground:
             Where the sponge is: bool masks of canvas windows (pixel (i, j) at canvas
             ``origin + step (j, i)``), grown by a pixel of the background.
         """
-        small = cv2.remap(frame, self.map_u, self.map_v, cv2.INTER_LINEAR,
-                          borderMode=cv2.BORDER_CONSTANT)
+        small = self.canvas_image(frame)
         weight = self.rate * self.in_frame
+        under = np.zeros(weight.shape, bool)
         for mask, origin, step in keep_out:
             x0, y0, x1, y1 = self._bounds(origin, mask.shape, step)
             if x1 > x0 and y1 > y0:
                 inside = cv2.resize(mask.astype(np.uint8), (x1 - x0, y1 - y0),
                                     interpolation=cv2.INTER_AREA)
                 inside = cv2.dilate(inside, np.ones((3, 3), np.uint8))
-                weight[y0:y1, x0:x1][inside > 0] = 0.0
+                under[y0:y1, x0:x1] |= inside > 0
+        weight[under] = 0.0
         colour = (model.back_project(small) > 0.5).astype(np.float32)
         self.image += weight[..., None] * (small.astype(np.float32) - self.image)
         self.colour += weight * (colour - self.colour)
+        # what lies under the sponge is not seen: a still thing there (or a sponge that
+        # was mistaken for one before it was known) fades from the evidence
+        self.colour[under] *= 1.0 - self.rate
         self.seen += weight * (1.0 - self.seen)
         self.updates += 1
-        # what windows read: the background's colours and where a still thing of the
-        # sponge's colour is
-        seen = np.maximum(self.seen, 1e-6)
-        self.mean = np.clip(self.image / seen[..., None], 0, 255).astype(np.uint8)
-        self.still = ((self.seen > 0.3) & (self.colour > 0.5 * seen)).astype(np.uint8)
+        self.still = ((self.seen > 0.3) & (self.colour > 0.5 * self.seen)).astype(np.uint8)
+        self._mean = None
+
+    @property
+    def mean(self) -> np.ndarray:
+        """The background's colours, BGR uint8 (computed when first needed after an update)."""
+        if self._mean is None:
+            seen = np.maximum(self.seen, 1e-6)
+            self._mean = np.clip(self.image / seen[..., None], 0, 255).astype(np.uint8)
+        return self._mean
 
     def _bounds(self, origin, shape, step) -> tuple[int, int, int, int]:
         """Background pixels covering a canvas window."""
@@ -108,6 +140,18 @@ class StaticBackground:
         x1 = min(int(np.ceil((origin[0] + width * step) * self.scale)), self.size[0])
         y1 = min(int(np.ceil((origin[1] + height * step) * self.scale)), self.size[1])
         return x0, y0, x1, y1
+
+    def still_in_canvas_image(self, image: np.ndarray) -> np.ndarray | None:
+        """Where a :meth:`canvas_image` shows a still thing of the sponge's colour as it
+        always did: bool (h, w); None before the background knows anything."""
+        if not self.updates or not self.still.any():
+            return None
+        b, g, r = cv2.split(cv2.absdiff(image, self.mean))
+        return (self.still > 0) & (cv2.max(cv2.max(b, g), r) < self.difference)
+
+    def canvas_pixels(self, pixels: np.ndarray) -> np.ndarray:
+        """Canvas (full-resolution) coordinates (n, 2) of background pixels (n, 2)."""
+        return (np.asarray(pixels, dtype=np.float64) + 0.5) / self.scale - 0.5
 
     def still_colour(self, window: np.ndarray, origin: np.ndarray, step: int
                      ) -> np.ndarray | None:

@@ -97,11 +97,21 @@ class TableStereo:
         return points
 
     def plane_near(self, pairs: list[tuple[np.ndarray, np.ndarray]], near: np.ndarray,
-                   radius: float, seed: int = 0) -> Plane | None:
+                   radius: float, prior_normal: np.ndarray | None = None,
+                   seed: int = 0) -> Plane | None:
         """The dominant plane of the surfaces within ``radius`` (metres) of ``near`` (3,),
         seen in one or more frame pairs; its normal points towards the cameras. None when
         too few points match (a plain, untextured table)."""
-        points = np.concatenate([self.table_points(left, right, near) for left, right in pairs])
+        return self.plane_of_points(
+            np.concatenate([self.table_points(left, right, near) for left, right in pairs]),
+            near, radius, prior_normal, seed)
+
+    def plane_of_points(self, points: np.ndarray, near: np.ndarray, radius: float,
+                        prior_normal: np.ndarray | None = None, seed: int = 0
+                        ) -> Plane | None:
+        """The dominant plane of ``points`` (n, 3) within ``radius`` of ``near`` (see
+        :meth:`plane_near`), pulled towards ``prior_normal`` (the world's up axis, when
+        known) by :func:`~wipelab.vision.table_plane.fit_plane`'s prior."""
         points = points[np.linalg.norm(points - near, axis=1) < radius]
         if len(points) < MIN_POINTS:
             return None
@@ -109,7 +119,7 @@ class TableStereo:
                                rng=np.random.default_rng(seed))
         if inliers.sum() < MIN_POINTS:
             return None
-        return fit_plane(points[inliers], towards=np.zeros(3))
+        return fit_plane(points[inliers], towards=np.zeros(3), prior_normal=prior_normal)
 
 
 def ransac_plane(points: np.ndarray, tolerance: float, rng: np.random.Generator,
