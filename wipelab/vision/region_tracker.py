@@ -40,7 +40,7 @@ from wipelab.vision.table_plane import Plane, fit_plane, points_on_plane
 from wipelab.vision.table_stereo import TableStereo
 from wipelab.vision.undistortion import Undistorter
 
-QUALITY_NONE, QUALITY_CENTROID, QUALITY_BOX = "", "centroid", "box"
+QUALITY_NONE, QUALITY_CENTROID, QUALITY_MONO, QUALITY_BOX = "", "centroid", "mono", "box"
 
 
 @dataclass(frozen=True)
@@ -106,7 +106,8 @@ class RegionEstimate:
         Sponge point, left optical frame, metres (NaN when not valid).
     valid : bool
     quality : str
-        ``centroid`` for a valid frame, ``""`` otherwise.
+        ``centroid`` (both cameras' regions on the plane), ``mono`` (one camera's, the other
+        hidden or cut by the image's edge) or ``""`` (not valid).
     rays : ndarray, shape (2, 3)
         The two cameras' measured viewing rays (NaN where a camera saw no region).
     areas : ndarray, shape (2,)
@@ -143,6 +144,12 @@ class _View:
         self.eye = invert_transform(T_cam_left)[:3, 3]
         self.K_distorted, self.D = K, D
         self.size = size
+        # canvas pixels that show the frame (not its surroundings), a pixel in from the edge
+        u, v = cv2.convertMaps(self.undistorter.map_xy, self.undistorter.map_fraction,
+                               cv2.CV_32FC1)
+        width, height = size
+        inside = ((u >= 1) & (v >= 1) & (u <= width - 2) & (v <= height - 2)).astype(np.uint8)
+        self.in_frame = cv2.erode(inside, np.ones((3, 3), np.uint8)) > 0
 
     def pixel(self, point_left: np.ndarray) -> np.ndarray:
         """Undistorted-canvas pixel (2,) of a left-frame point (3,)."""
@@ -332,7 +339,7 @@ class RegionTracker:
         point, self.size = moving.last_point, moving.size
         masks, windows = [], []
         for view, frame, background in zip(self.views, frames, self.backgrounds):
-            window, origin = self._window(view, frame, point, 1.5 * self.size)
+            window, origin, _ = self._window(view, frame, point, 1.5 * self.size)
             probability = self.prior.back_project(window)
             still = background.still_colour(window, origin, 1)
             if still is not None:
@@ -380,7 +387,7 @@ class RegionTracker:
         x1 = int(min(max(math.ceil(centre[0] + half), x0 + 1), width))
         y1 = int(min(max(math.ceil(centre[1] + half), y0 + 1), height))
         return (view.undistorter.window(frame, x0, y0, x1, y1, step),
-                np.array([x0, y0], float))
+                np.array([x0, y0], float), (x0, y0, x1, y1))
 
     def _predict(self) -> tuple[np.ndarray, float]:
         """Predicted point (3,) and how far it may be off, metres."""
@@ -401,19 +408,20 @@ class RegionTracker:
         """Blend the frames into the static backgrounds, except where the sponge's regions
         are (per camera: (mask, origin, step))."""
         for background, frame, region in zip(self.backgrounds, frames, keep_out):
-            background.update(frame, self.model, [region])
+            if region is not None:
+                background.update(frame, self.model, [region])
 
     def _region(self, view: _View, frame: np.ndarray, point: np.ndarray, slack: float,
                 background: StaticBackground | None = None):
         """The sponge's region near ``point`` in one camera: (ray (3,), area in canvas
         pixels, ray (3,) of a point 10 pixels along the region's longer axis, (mask, origin,
-        step) of the region in the window) or None."""
+        step) of the region in the window, whether it reaches the frame's edge) or None."""
         p = self.params
         pixels_per_metre = view.focal / max(view.depth(point), 1e-3)
         # a sponge much larger than needed for sub-pixel centroids is read at a coarser step
         step = max(1, int(self.size * pixels_per_metre / p.sponge_pixels))
-        window, origin = self._window(view, frame, point, p.window_size * self.size + slack,
-                                      step)
+        window, origin, (x0, y0, x1, y1) = self._window(
+            view, frame, point, p.window_size * self.size + slack, step)
         probability = self.model.back_project(window)
         if background is not None:
             # the sponge's colour where the scene showed it while the sponge was elsewhere,
@@ -432,7 +440,8 @@ class RegionTracker:
         centroid, _, mass, axis, _ = region_moments(probability, inside, tuple(origin), step)
         area = mass * step * step  # sponge pixels (soft), canvas units
         rays = view.rays_of_pixels(np.stack([centroid, centroid + 10.0 * axis]))
-        return rays[0], area, rays[1], (inside, origin, step)
+        truncated = bool(np.any(inside & ~view.in_frame[y0:y1:step, x0:x1:step]))
+        return rays[0], area, rays[1], (inside, origin, step), truncated
 
     def _measure(self, frames) -> RegionEstimate:
         p = self.params
@@ -440,39 +449,58 @@ class RegionTracker:
         if predicted is None:
             return self._invalid("no prediction")
         rays = np.full((2, 3), np.nan)
-        axis_ray = np.full(3, np.nan)
+        axis_rays = np.full((2, 3), np.nan)
         areas = np.zeros(2)
-        masks = [None, None]
+        masks, problems = [None, None], ["not seen", "not seen"]
         for k, (view, frame) in enumerate(zip(self.views, frames)):
             region = self._region(view, frame, predicted, slack + 0.02, self.backgrounds[k])
-            if region is not None:
-                rays[k], areas[k], along, masks[k] = region
-                if k == 0:
-                    axis_ray = along
-
+            if region is None:
+                continue
+            rays[k], areas[k], axis_rays[k], masks[k], truncated = region
+            problems[k] = "at the edge of the image" if truncated else ""
+        metric_areas = np.array([area * (view.depth(predicted) / view.focal) ** 2
+                                 for area, view in zip(areas, self.views)])
+        for k in range(2):
+            if not problems[k] and len(self.areas[k]) >= 5:
+                ratio = metric_areas[k] / np.median(self.areas[k])
+                if not p.min_area_ratio <= ratio <= p.max_area_ratio:
+                    problems[k] = f"{ratio:.2f}x its usual area"
         stereo = np.full(3, np.nan)
         if np.all(np.isfinite(rays)):
             stereo = triangulate_rays(rays[:1], rays[1:], self.calibration.R,
                                       self.calibration.T)[0][0]
-        metric_areas = np.array([area * (view.depth(predicted) / view.focal) ** 2
-                                 for area, view in zip(areas, self.views)])
-        reason = self._check(rays, metric_areas, stereo, predicted, slack)
-        if reason:
-            return self._fail(rays, areas, stereo, reason)
-        point = self._locate(rays, stereo)
-        self._accept(frames, point, rays, metric_areas, stereo)
+        good = [k for k in range(2) if not problems[k]]
+        reason = "; ".join(f"{side} region {problem}" for side, problem
+                           in zip(("left", "right"), problems) if problem)
+        point, quality = None, QUALITY_CENTROID
+        if len(good) == 2:
+            reason = self._disagreement(rays)
+            if not reason:
+                point = self._locate(rays, stereo)
+        elif len(good) == 1:
+            point = self._locate_mono(good[0], rays[good[0]])
+            quality = QUALITY_MONO
+            if point is not None and \
+                    np.linalg.norm(point - predicted) > 0.5 * self.size + slack:
+                point, reason = None, reason + "; the one camera's region jumped"
+        if point is None:
+            return self._fail(rays, areas, stereo, reason or "no plane yet for one camera")
+        self._accept(frames, point, rays, metric_areas, stereo, good)
         if self.frame % p.background_every == 0:
             self._update_backgrounds(frames, masks)
-        return RegionEstimate(point, True, QUALITY_CENTROID, rays, areas, stereo,
-                              self._direction(rays[0], axis_ray))
+        k = good[0]
+        return RegionEstimate(point, True, quality, rays, areas, stereo,
+                              self._direction(k, rays[k], axis_rays[k]))
 
-    def _direction(self, ray: np.ndarray, axis_ray: np.ndarray) -> np.ndarray:
-        """Unit direction (3,) on the plane from where ``ray`` meets it to where
-        ``axis_ray`` does (left camera rays)."""
+    def _direction(self, k: int, ray: np.ndarray, axis_ray: np.ndarray) -> np.ndarray:
+        """Unit direction (3,) on the plane from where camera k's ``ray`` meets it to where
+        its ``axis_ray`` does."""
         plane = self.sponge_plane()
         if plane is None:
             return np.full(3, np.nan)
-        ends = plane.intersect(np.zeros((2, 3)), np.stack([ray, axis_ray]))
+        view = self.views[k]
+        ends = plane.intersect(np.broadcast_to(view.eye, (2, 3)),
+                               np.stack([ray, axis_ray]) @ view.R)
         direction = ends[1] - ends[0]
         return direction / np.linalg.norm(direction)
 
@@ -512,22 +540,29 @@ class RegionTracker:
         cameras = [(view.R, view.t, view.focal) for view in self.views]
         return points_on_plane(plane, [rays[:1], rays[1:]], cameras)[0]
 
-    def _check(self, rays, areas, stereo, predicted, slack) -> str:
-        p = self.params
-        if not np.all(np.isfinite(rays)):
-            return "not seen by both cameras"
-        for k in range(2):
-            if len(self.areas[k]) >= 5:
-                ratio = areas[k] / np.median(self.areas[k])
-                if not p.min_area_ratio <= ratio <= p.max_area_ratio:
-                    return f"region {'left' if k == 0 else 'right'} {ratio:.2f}x its usual area"
+    def _disagreement(self, rays: np.ndarray) -> str:
+        """Why the two cameras' regions cannot show the same sponge ("" if they can): where
+        their rays meet the plane must differ as usual (a hand hiding part of the sponge in
+        one camera shifts its centroid)."""
         plane = self.sponge_plane()
-        if plane is not None and len(self.ray_offsets) >= 5:
-            offset = self._ray_offset(plane, rays)
-            typical = np.median(np.array(self.ray_offsets), axis=0)
-            if np.linalg.norm(offset - typical) > p.max_ray_disagreement * self.size:
-                return "the cameras' regions disagree"
+        if plane is None or len(self.ray_offsets) < 5:
+            return ""
+        typical = np.median(np.array(self.ray_offsets), axis=0)
+        if np.linalg.norm(self._ray_offset(plane, rays) - typical) > \
+                self.params.max_ray_disagreement * self.size:
+            return "the cameras' regions disagree"
         return ""
+
+    def _locate_mono(self, k: int, ray: np.ndarray) -> np.ndarray | None:
+        """The sponge point from camera k alone: where its ray meets the plane, moved by half
+        the usual offset between the two cameras' points (None before both are known)."""
+        plane = self.sponge_plane()
+        if plane is None or len(self.ray_offsets) < 5:
+            return None
+        view = self.views[k]
+        point = plane.intersect(view.eye[None], (view.R.T @ ray)[None])[0]
+        half = 0.5 * np.median(np.array(self.ray_offsets), axis=0)
+        return point + half if k == 0 else point - half
 
     def _ray_offset(self, plane: Plane, rays: np.ndarray) -> np.ndarray:
         """Where the right ray meets the plane minus where the left one does (3,)."""
@@ -535,7 +570,7 @@ class RegionTracker:
                   for view, ray in zip(self.views, rays)]
         return points[1] - points[0]
 
-    def _accept(self, frames, point, rays, areas, stereo) -> None:
+    def _accept(self, frames, point, rays, areas, stereo, good) -> None:
         self.history.append((self.frame, point.copy()))
         # a "still thing" where the sponge is now was the sponge resting before it moved
         for ident, (centre, _) in list(self.candidates.static.items()):
@@ -543,20 +578,20 @@ class RegionTracker:
                 del self.candidates.static[ident]
         self.failures = 0
         self.valid_count += 1
-        for k in range(2):
+        for k in good:
             self.areas[k].append(areas[k])
-        if self.valid_count % 30 == 0:
+        if self.valid_count % 30 == 0 and self.areas[0] and self.areas[1]:
             # the sponge's size as it is measured now (its first estimate came from a few
             # low-resolution frames)
             self.size = float(np.sqrt(np.median(self.areas[0]) + np.median(self.areas[1])) / np.sqrt(2.0))
-        if np.all(np.isfinite(stereo)):
+        if len(good) == 2 and np.all(np.isfinite(stereo)):
             self._stereo_points.append(stereo)
             self._refresh_plane()
         p = self.params
         if len(self._table_points) < p.table_pairs and self.valid_count % p.table_every == 0:
             self._measure_table(frames)
         plane = self.sponge_plane()
-        if plane is not None:
+        if plane is not None and len(good) == 2:
             self.ray_offsets.append(self._ray_offset(plane, rays))
 
     def _fail(self, rays, areas, stereo, reason: str) -> RegionEstimate:

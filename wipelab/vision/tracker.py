@@ -30,14 +30,14 @@ from wipelab.vision.box_tracker import BoxParams, BoxTracker
 from wipelab.vision.calibration import StereoCalibration
 from wipelab.vision.colour_model import ColourSource, LinearColourFeature
 from wipelab.vision.projection import invert_transform, transform_points
-from wipelab.vision.region_tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_NONE,
-                                           RegionTracker, RegionTrackerParams)
+from wipelab.vision.region_tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_MONO,
+                                           QUALITY_NONE, RegionTracker, RegionTrackerParams)
 from wipelab.vision.particle_filter import wrap_half_turn
 from wipelab.vision.sponge_box import SpongeBox
 from wipelab.vision.table_plane import table_axes
 
 __all__ = ["TrackerParams", "FrameEstimate", "SpongeTracker", "QUALITY_BOX",
-           "QUALITY_CENTROID", "QUALITY_NONE"]
+           "QUALITY_CENTROID", "QUALITY_MONO", "QUALITY_NONE"]
 
 
 @dataclass(frozen=True)
@@ -81,7 +81,8 @@ class FrameEstimate:
         of the colour region's longer axis); NaN when not valid.
     valid : bool
     quality : str
-        ``box``, ``centroid`` or ``""`` (not valid).
+        ``box``, ``centroid``, ``mono`` or ``""`` (not valid); see
+        :class:`~wipelab.vision.region_tracker.RegionEstimate`.
     areas : ndarray, shape (2,)
         Pixels of the sponge's colour region in the left and right image (0 when not
         measured this frame).
@@ -161,7 +162,7 @@ class SpongeTracker:
             self._start_box(left, right, point)
         pose = np.append(transform_points(self.T_track_left, point),
                          self._yaw(region.direction))
-        return FrameEstimate(pose, True, QUALITY_CENTROID, region.areas, self._particles())
+        return FrameEstimate(pose, True, region.quality, region.areas, self._particles())
 
     def _yaw(self, direction_left: np.ndarray) -> float:
         """Yaw (rad, half turn) of the region's long axis (3,), left frame, about the table
