@@ -23,9 +23,10 @@ from numba import njit
 
 from wipelab.learning.afo import pool_fundamental, pool_lock, pool_logic_step, pool_substep
 from wipelab.learning.afs import afs_lock, afs_substep
-from wipelab.learning.derivatives import MIN_WINDOW, evaluate_polynomial
+from wipelab.learning.derivatives import MIN_WINDOW, evaluate_polynomial, window_for
 from wipelab.learning.dmp import dmp_step, forcing_target
 from wipelab.learning.harmonic import locked_series
+from wipelab.learning.kernels import activations
 from wipelab.learning.lwr import lwr_update
 from wipelab.learning.normalise import (PeriodWindow, RunningRange, period_statistics,
                                         running_normalise)
@@ -231,9 +232,7 @@ def _learn_lwr(settings: KernelSettings, state: LearnerState, y, phase: float, o
     state.value_omegas[slot] = omega
     if not valid:
         return
-    samples = settings.window_periods * 2.0 * math.pi / (max(omega, 1e-12) * dt)
-    window = 2 * int(round((samples - 1.0) / 2.0)) + 1
-    window = min(max(window, MIN_WINDOW), max_window)
+    window = window_for(omega, dt, settings.window_periods, max_window)
     if state.valid_run[0] < window:                   # a gap in the window
         return
     points = 1
@@ -263,8 +262,7 @@ def _learn_lwr(settings: KernelSettings, state: LearnerState, y, phase: float, o
         value, slope, curvature = evaluate_polynomial(coefficients, x)
         target = forcing_target(value, slope / dt, curvature / (dt * dt), omega_c, state.goal,
                                 settings.alpha_s, settings.beta_s) / state.amplitude
-        for i in range(n_kernels):
-            psi[i] = math.exp(settings.width * (math.cos(phase_c - settings.centres[i]) - 1.0))
+        activations(phase_c, settings.centres, settings.width, psi)
         # f_targ ~ w r, regressed in units of r: the prior P0 = 1 then weighs the same for
         # any scale of the movement.
         lwr_update(psi, ones, target, forgetting, state.weights, state.lwr_P)
