@@ -108,7 +108,7 @@ from wipelab.learning.kernels import default_width, kernel_centres
 from wipelab.learning.model import PeriodicModel
 from wipelab.learning.normalise import new_period_window, new_running_range
 from wipelab.learning.online_kernel import (AFO, AFS, LWR, POSITIONS, KernelSettings,
-                                           LearnerState, learner_run, learner_step)
+                                           LearnerState, learner_run, step_entry_point)
 from wipelab.learning.oscillators import DOF_COUPLINGS, substep_count
 from wipelab.learning.period_detector import PeriodDetectorParameters, new_detector
 from wipelab.learning.position_fit import new_position_fit
@@ -326,13 +326,18 @@ class OnlineLearner:
         self.n_dofs = n_dofs
         self.settings = kernel_settings(n_dofs, dt, params, reference_dof)
         self.state = new_learner_state(n_dofs, dt, params, self.settings)
+        self._step = None      # the compiled step's entry point, resolved at the first step
 
     def step(self, y, valid: bool = True) -> np.ndarray:
         """Learn from one sample y (d,) in m (a placeholder when not ``valid``: the input was
         not observed; it teaches nothing, the canonical system runs on at its frequency);
         return the learned movement at the same time (d,), m (the learner's own array)."""
-        learner_step(self.settings, self.state, np.ascontiguousarray(y, dtype=np.float64),
-                     bool(valid))
+        y = np.ascontiguousarray(y, dtype=np.float64)
+        if y.shape != (self.n_dofs,):
+            raise ValueError(f"y must have shape ({self.n_dofs},), got {y.shape}")
+        if self._step is None:
+            self._step = step_entry_point(self.settings, self.state)
+        self._step(self.settings, self.state, y, bool(valid))
         return self.state.output
 
     def process(self, Y, valid=None, every: int = 1) -> dict:

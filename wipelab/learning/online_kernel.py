@@ -19,7 +19,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, typeof, types
 
 from wipelab.learning.afo import pool_fundamental, pool_lock, pool_logic_step, pool_substep
 from wipelab.learning.afs import afs_lock, afs_substep
@@ -355,6 +355,19 @@ def learner_step(settings: KernelSettings, state: LearnerState, y, valid: bool) 
                  previous_phase, previous_omega, dt, settings.max_phase_step,
                  f0[:y.shape[0]], f_mid[:y.shape[0]], f1[:y.shape[0]])
     state.count[0] = count + 1
+
+
+def step_entry_point(settings: KernelSettings, state: LearnerState):
+    """:func:`learner_step` compiled for these settings and state (and y float64 (d,)
+    contiguous, valid bool), as a function that skips numba's dispatch.
+
+    A call through the dispatcher types every argument first: for the ~70 arrays of the
+    state that is most of the cost of one sample (measured in ``benchmarks/bench_learn.py``).
+    The entry point only unboxes them; it must be given arguments of exactly these types
+    (``OnlineLearner.step`` checks y).
+    """
+    return learner_step.compile((typeof(settings), typeof(state), types.float64[::1],
+                                 types.boolean))
 
 
 @njit(cache=True)
