@@ -1,7 +1,14 @@
-"""Benchmarks of the learn stage (issue 2): frequency, waveform, modulation, peer, speed.
+"""Benchmarks of the learn stage (issues 2 and 11): frequency, waveform, modulation, peer, speed.
 
-Run: ``python benchmarks/bench_learn.py`` (under a minute on one core). Prints Markdown
-tables. Signals (:mod:`wipelab.learning.signals`): two DOFs with an offset, 2nd and 3rd
+Run: ``python benchmarks/bench_learn.py`` (about 4 minutes on the 2-core development machine
+at a load average of 9). Prints Markdown tables.
+
+Tables (a)-(c) (issue 11) use held-out demonstrations of the independent generator
+:mod:`wipelab.learning.demonstrator` (seeds from ``HELD_OUT_SEEDS``, never used while
+tuning): from the start, tempo steps of +-30 %, the waveform after 10 periods; the learner
+against the previous one (eqs. 13-15, a 40-period mean, no change test).
+
+The other tables use signals (:mod:`wipelab.learning.signals`): two DOFs with an offset, 2nd and 3rd
 harmonics and white noise of 2 % of each DOF's amplitude, sampled at 30 Hz (vision) and
 500 Hz, fundamentals 0.3-3 Hz, optionally with a frequency step half-way.
 
