@@ -324,12 +324,12 @@ def speed_table() -> None:
     lag (same results, byte for byte), this function on commit 28230d3 and on 591994e, one
     after the other at a load average of 5 on 2 cores; CPU microseconds per sample, AFS:
 
-    ==========  ===========================  ===========================
-    rate (Hz)   process() before / after     step() median (p99) before / after
-    ==========  ===========================  ===========================
-    30          26.0 / 20.6                  40.1 (84) / 23.7 (63)
-    500         10.5 / 9.5                   24.0 (51) / 12.7 (17)
-    ==========  ===========================  ===========================
+    =========  ========================  ==================================
+    rate (Hz)  process() before / after  step() median (p99) before / after
+    =========  ========================  ==================================
+    30         26.0 / 20.6               40.1 (84) / 23.7 (63)
+    500        10.5 / 9.5                24.0 (51) / 12.7 (17)
+    =========  ========================  ==================================
 
     The old line "limit 25, aim 5" (us per sample of the compiled loop) is met at 500 Hz
     (9.5) and at 30 Hz (20.6, 17 oscillator substeps and a detector block per sample), not
