@@ -24,13 +24,16 @@ def test_step_and_process_run_the_same_code(canonical, regression):
     history = batch.process(Y, valid)
     single = OnlineLearner(2, 1 / 30, params)
     for k in range(t.size):
-        output = single.step(Y[k], valid[k])
+        output = single.step(Y[k] if k % 2 else list(Y[k]), valid[k])   # any sequence of d
         np.testing.assert_array_equal(output, history["output"][k])
         assert single.phase == history["phase"][k]
         assert single.frequency_hz == history["frequency_hz"][k]
     np.testing.assert_array_equal(single.weights, batch.weights)
     assert single.hand_overs == batch.hand_overs == history["hand_overs"][-1] >= 1
     assert single.oscillators_hz.shape == (3 if canonical == "afo" else 1,)
+    with pytest.raises(ValueError, match=r"y must have shape \(2,\), got \(2, 2\)"):
+        single.step(Y[:2])
+    assert single.count == t.size
 
 
 def test_a_gap_teaches_nothing_and_the_oscillator_runs_through_it():

@@ -3,18 +3,23 @@
 import numpy as np
 import pytest
 
-from wipelab.learning.derivatives import CentredDerivatives, savgol_centre_coefficients, window_for
+from wipelab.learning.derivatives import evaluate_polynomial, polynomial_fit_matrix, window_for
 from wipelab.learning.normalise import (new_period_window, new_running_range, period_statistics,
                                         running_normalise)
 from wipelab.learning.sampling import to_uniform
+
+
+def _centred_fit(values, degree, x=0.0):
+    """y, y', y'' (per sample^k) at x samples from the centre of the window ``values``."""
+    coefficients = polynomial_fit_matrix(len(values), degree) @ np.asarray(values)[:, None]
+    return tuple(v[0] for v in evaluate_polynomial(coefficients, x))
 
 
 @pytest.mark.parametrize("window", [5, 7, 21, 101])
 def test_centred_fit_is_exact_for_quartics(window):
     j = np.arange(window) - (window - 1) / 2
     y = 0.3 - 0.2 * j + 0.05 * j ** 2 + 0.01 * j ** 3 - 0.002 * j ** 4
-    value, first, second = savgol_centre_coefficients(window, 4) @ y
-    assert (value, first, second) == pytest.approx((0.3, -0.2, 0.1), abs=1e-9)
+    assert _centred_fit(y, 4) == pytest.approx((0.3, -0.2, 0.1), abs=1e-9)
 
 
 def test_window_follows_the_period_and_stays_odd_and_bounded():
@@ -23,37 +28,27 @@ def test_window_follows_the_period_and_stays_odd_and_bounded():
     assert window_for(2 * np.pi * 0.1, 0.002, 0.125, 101) == 101    # capped
 
 
-def test_centred_derivatives_pair_estimates_with_the_centre_sample():
+def test_centred_fit_smooths_noise_without_lag_at_the_centre():
     dt, omega = 0.01, 2 * np.pi
-    derivatives = CentredDerivatives(1, dt, 0.125, 4, 101)
-    for k in range(40):
-        t = k * dt
-        derivatives.push(np.array([np.sin(omega * t)]), phase=omega * t, omega=omega)
-    y, yd, ydd, phase, _ = derivatives.centre(omega)
-    t_c = phase / omega
-    assert y[0] == pytest.approx(np.sin(omega * t_c), abs=1e-5)
-    assert yd[0] == pytest.approx(omega * np.cos(omega * t_c), rel=1e-4)
-    assert ydd[0] == pytest.approx(-omega ** 2 * np.sin(omega * t_c), rel=1e-3)
-    assert t_c == pytest.approx(39 * dt - 6 * dt)                   # window 13 -> 6 samples late
+    window = window_for(omega, dt, 0.125, 101)                      # 13 samples
+    t = np.arange(window) * dt
+    y, yd, ydd = _centred_fit(np.sin(omega * t), 4)
+    t_c = t[(window - 1) // 2]
+    assert y == pytest.approx(np.sin(omega * t_c), abs=1e-5)
+    assert yd / dt == pytest.approx(omega * np.cos(omega * t_c), rel=1e-4)
+    assert ydd / dt ** 2 == pytest.approx(-omega ** 2 * np.sin(omega * t_c), rel=1e-3)
 
 
 def test_estimates_between_samples_follow_the_local_polynomial():
-    dt, omega = 0.05, 2 * np.pi * 0.5
-    derivatives = CentredDerivatives(1, dt, 0.125, 4, 101)           # window of 5 samples
+    dt = 0.05
     quartic = lambda t: 0.3 - 0.2 * t + 0.5 * t ** 2 + 0.1 * t ** 3 - 0.4 * t ** 4
-    for k in range(9):
-        derivatives.push(np.array([quartic(k * dt)]), phase=omega * k * dt, omega=omega)
-    y, yd, ydd, phases, omega_c = derivatives.between(omega, 4)
-    t_x = (6 + (np.arange(4) + 0.5) / 4 - 0.5) * dt                # around the centre sample 6
-    np.testing.assert_allclose(y[:, 0], quartic(t_x), atol=1e-12)
-    np.testing.assert_allclose(yd[:, 0], -0.2 + t_x + 0.3 * t_x ** 2 - 1.6 * t_x ** 3, atol=1e-9)
-    np.testing.assert_allclose(ydd[:, 0], 1.0 + 0.6 * t_x - 4.8 * t_x ** 2, atol=1e-8)
-    np.testing.assert_allclose(phases, omega * t_x)
-    centre = derivatives.centre(omega)
-    single = derivatives.between(omega, 1)
-    for a, b in zip(centre[:3], single[:3]):
-        np.testing.assert_allclose(a, b[0], atol=1e-12)
-    assert omega_c == omega
+    t = np.arange(4, 9) * dt                                          # centre sample 6
+    for x in (np.arange(4) + 0.5) / 4 - 0.5:
+        t_x = (6 + x) * dt
+        y, yd, ydd = _centred_fit(quartic(t), 4, x)
+        assert y == pytest.approx(quartic(t_x), abs=1e-12)
+        assert yd / dt == pytest.approx(-0.2 + t_x + 0.3 * t_x ** 2 - 1.6 * t_x ** 3, abs=1e-9)
+        assert ydd / dt ** 2 == pytest.approx(1.0 + 0.6 * t_x - 4.8 * t_x ** 2, abs=1e-8)
 
 
 def _statistics(window, value, omega, dt):

@@ -6,8 +6,11 @@ each control period gives y, y', y'' (a centred polynomial fit of the recent com
 heights, paired with the phase at the window's centre), the forcing target of the text after
 eq. 12, and one step of the incremental LWR of eqs. 13-15.
 
-The samples are learned in one compiled pass (numba) when the weights are next needed, as
-the house pattern: the kernel is tested against the numpy reference of the learning package.
+The samples are learned in one compiled pass (numba) when the weights are next needed. The
+pass is made of the learning package's compiled pieces, the same ones the online movement
+learner runs (:func:`~wipelab.learning.derivatives.evaluate_polynomial`,
+:func:`~wipelab.learning.dmp.forcing_target`, :func:`~wipelab.learning.kernels.activations`,
+:func:`~wipelab.learning.lwr.lwr_update`): one implementation of each.
 
 Convergence is judged once per period: the learned waveform (the DMP's limit cycle, on a
 grid of phases) is compared with the one a period before; learning has converged when the
@@ -24,8 +27,11 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from wipelab.learning import kernel_centres, limit_cycle
-from wipelab.learning.derivatives import savgol_centre_coefficients, window_for
+from wipelab.learning import IncrementalLWR, kernel_centres, limit_cycle
+from wipelab.learning.derivatives import evaluate_polynomial, polynomial_fit_matrix, window_for
+from wipelab.learning.dmp import forcing_target
+from wipelab.learning.kernels import activations
+from wipelab.learning.lwr import lwr_update
 from wipelab.numba_cache import forget_stale_kernels
 
 #: Phases at which learned waveforms are compared (rad).
@@ -70,11 +76,11 @@ class ForceProfileLearner:
     """Learns one DOF (z) of a periodic DMP online from the commanded height.
 
     Per sample, as the paper's online learning: a centred cubic fit of the recent heights
-    (:class:`~wipelab.learning.derivatives.CentredDerivatives`: ``derivative_window`` of a
-    period, at most :data:`MAX_WINDOW` samples) gives y, y', y'' at the window's centre, paired
-    with the phase and Omega recorded there; the forcing target (text after eq. 12) and the
-    kernels at that phase (eq. 8) make one step of the incremental LWR (eqs. 13-15, started at
-    w = 0, P = 1). The samples are queued by :meth:`update` and learned in one compiled pass
+    (``derivative_window`` of a period, at most :data:`MAX_WINDOW` samples) gives y, y', y''
+    at the window's centre, paired with the phase and Omega recorded there; the forcing target
+    (text after eq. 12) and the kernels at that phase (eq. 8) make one step of the incremental
+    LWR (eqs. 13-15, an :class:`~wipelab.learning.lwr.IncrementalLWR` started at w = 0, P = 1).
+    The samples are queued by :meth:`update` and learned in one compiled pass
     (:func:`learn_heights`) when the weights are next read: the result is the same as
     learning each at once.
 
@@ -98,8 +104,7 @@ class ForceProfileLearner:
         self.goal, self.amplitude = float(goal), float(amplitude)
         self.dt = float(dt)
         self.params = params
-        self._weights = np.zeros(self.n_kernels)
-        self._p = np.ones(self.n_kernels)
+        self._lwr = IncrementalLWR(self.n_kernels, 1, forgetting=params.forgetting)
         self._centres = kernel_centres(self.n_kernels)
         # samples not yet learned, after the MAX_WINDOW - 1 before them (the fit's history)
         self._heights: list[float] = []
@@ -112,7 +117,7 @@ class ForceProfileLearner:
     def weights_(self) -> np.ndarray:
         """Learned weights (N,)."""
         self._learn_queued()
-        return self._weights.copy()
+        return self._lwr.weights_[0].copy()
 
     def update(self, height: float, phase: float, omega: float) -> None:
         """Feed the commanded height Y (m) at canonical phase (rad) and Omega (rad/s)."""
@@ -135,10 +140,10 @@ class ForceProfileLearner:
         k = self._learned
         for window, run in itertools.groupby(windows.tolist()):
             stop = k + len(list(run))
-            learn_heights(heights, phases, omegas, k, stop, first_count, window,
-                          savgol_centre_coefficients(window, DERIVATIVE_DEGREE), self.dt,
+            learn_heights(heights, phases, omegas, k, stop, first_count,
+                          polynomial_fit_matrix(window, DERIVATIVE_DEGREE), self.dt,
                           self.goal, self.amplitude, self.alpha_s, self.beta_s, self._centres,
-                          self.width, self.params.forgetting, self._weights, self._p)
+                          self.width, self._lwr.forgetting, self._lwr.weights_, self._lwr.P_)
             k = stop
         keep = max(0, len(heights) - (MAX_WINDOW - 1))
         del self._heights[:keep], self._phases[:keep], self._omegas[:keep]
@@ -152,38 +157,36 @@ class ForceProfileLearner:
 
 
 @njit(cache=True)
-def learn_heights(heights, phases, omegas, start, stop, first_count, window, coefficients, dt,
-                  goal, amplitude, alpha_s, beta_s, centres, width, forgetting, weights, p):
+def learn_heights(heights, phases, omegas, start, stop, first_count, fit, dt, goal, amplitude,
+                  alpha_s, beta_s, centres, width, forgetting, weights, P):
     """Learn samples ``start`` to ``stop`` (exclusive) of ``heights`` (m; with their
-    ``phases`` rad and ``omegas`` rad/s), updating ``weights`` and ``p`` (N,) in place.
+    ``phases`` rad and ``omegas`` rad/s) into ``weights`` and ``P`` (1, N) of eqs. 13-15.
 
-    Sample k is the (``first_count`` + k + 1)-th received; once ``window`` have been received,
-    its window is samples k - window + 1 .. k, fitted with ``coefficients`` (3, window) of
-    :func:`~wipelab.learning.derivatives.savgol_centre_coefficients`. Then, as
-    :func:`~wipelab.learning.dmp.forcing_target`,
-    :func:`~wipelab.learning.kernels.kernel_activations` (kernel ``centres`` (N,), ``width``)
-    and :meth:`~wipelab.learning.lwr.IncrementalLWR.update` (p: its P, r = ``amplitude``).
+    Sample k is the (``first_count`` + k + 1)-th received; once a window of L samples has
+    been received (``fit``: the (degree + 1, L) matrix of
+    :func:`~wipelab.learning.derivatives.polynomial_fit_matrix`), the polynomial through
+    samples k - L + 1 .. k gives y, y', y'' at its centre, whose phase and Omega the forcing
+    target and the kernels (``centres`` (N,), ``width``) take; r = ``amplitude``.
     """
+    window = fit.shape[1]
+    coefficients = np.empty((fit.shape[0], 1))
+    psi = np.empty(centres.shape[0])
+    goals, amplitudes = np.full(1, goal), np.full(1, amplitude)
     for k in range(start, stop):
         if first_count + k + 1 < window:
             continue
         first = k + 1 - window
-        y = yd = ydd = 0.0
-        for j in range(window):
-            value = heights[first + j]
-            y += coefficients[0, j] * value
-            yd += coefficients[1, j] * value
-            ydd += coefficients[2, j] * value
-        yd /= dt
-        ydd /= dt ** 2
+        for q in range(fit.shape[0]):
+            total = 0.0
+            for j in range(window):
+                total += fit[q, j] * heights[first + j]
+            coefficients[q, 0] = total
+        y, slope, curvature = evaluate_polynomial(coefficients, 0.0)
         centre = first + (window - 1) // 2
-        phase, omega = phases[centre], omegas[centre]
-        target = ydd / omega ** 2 - alpha_s * (beta_s * (goal - y) - yd / omega)   # f_targ
-        for i in range(centres.size):
-            psi = math.exp(width * (math.cos(phase - centres[i]) - 1.0))          # eq. 8
-            error = target - weights[i] * amplitude                                 # eq. 15
-            p[i] = p[i] / (forgetting + psi * p[i] * amplitude ** 2)                # eq. 14
-            weights[i] += psi * p[i] * amplitude * error                            # eq. 13
+        target = forcing_target(y, slope / dt, curvature / dt ** 2, omegas[centre], goals,
+                                alpha_s, beta_s)
+        activations(phases[centre], centres, width, psi)
+        lwr_update(psi, amplitudes, target, forgetting, weights, P)
 
 
 class ConvergenceMonitor:

@@ -17,6 +17,7 @@ import math
 import numpy as np
 from numba import njit
 
+from wipelab.learning.kernels import activation
 from wipelab.numba_cache import forget_stale_kernels
 
 
@@ -55,7 +56,7 @@ def forcing(phase, weights, width, centres, out):
     total = 0.0
     out[:] = 0.0
     for i in range(centres.shape[0]):
-        psi = math.exp(width * (math.cos(phase - centres[i]) - 1.0))
+        psi = activation(phase, centres[i], width)
         total += psi
         for d in range(out.shape[0]):
             out[d] += psi * weights[d, i]

@@ -1,8 +1,13 @@
-"""The periodic kernels of the output system (eq. 8) and the forcing term they weight (eq. 6)."""
+"""The periodic kernels of the output system (eq. 8)."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit
+
+from wipelab.numba_cache import forget_stale_kernels
 
 
 def default_width(n_kernels: int) -> float:
@@ -15,8 +20,23 @@ def kernel_centres(n_kernels: int) -> np.ndarray:
     return 2.0 * np.pi * np.arange(n_kernels) / n_kernels
 
 
+@njit(cache=True)
+def activation(phase: float, centre: float, width: float) -> float:
+    """Eq. 8 for one kernel: psi = exp(h (cos(phi - c) - 1)), which peaks (= 1) at phi = c
+    (phase and centre in rad, width h dimensionless)."""
+    return math.exp(width * (math.cos(phase - centre) - 1.0))
+
+
+@njit(cache=True)
+def activations(phase: float, centres, width: float, out) -> None:
+    """Eq. 8 for every kernel at one phase (rad): psi_i into out (N,), centres c_i (N,)."""
+    for i in range(centres.shape[0]):
+        out[i] = activation(phase, centres[i], width)
+
+
 def kernel_activations(phase, n_kernels: int, width: float) -> np.ndarray:
-    """Eq. 8: psi_i = exp(h (cos(phi - c_i) - 1)), which peaks (= 1) at phi = c_i.
+    """Eq. 8 at many phases (the array form of :func:`activation`):
+    psi_i = exp(h (cos(phi - c_i) - 1)), which peaks (= 1) at phi = c_i.
 
     Parameters
     ----------
@@ -35,18 +55,4 @@ def kernel_activations(phase, n_kernels: int, width: float) -> np.ndarray:
     return np.exp(width * (np.cos(phase[..., None] - kernel_centres(n_kernels)) - 1.0))
 
 
-def normalised_forcing(psi: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """The forcing shape sum_i psi_i w_i / sum_i psi_i of eq. 6, before the amplitude r.
-
-    Parameters
-    ----------
-    psi : ndarray, shape (..., N)
-        Kernel activations.
-    weights : ndarray, shape (d, N)
-        One row of weights per DOF.
-
-    Returns
-    -------
-    ndarray, shape (..., d)
-    """
-    return (psi @ weights.T) / psi.sum(axis=-1, keepdims=True)
+forget_stale_kernels(__name__)

@@ -7,89 +7,86 @@ Per sample, as a robot watching the demonstration would:
    frequency, phase and series of a least-squares fit of the last two periods near 2 pi / T
    (:func:`~wipelab.learning.harmonic.locked_series`, the systems' ``lock``). Afterwards the
    detector supervises: when the period it holds and the fundamental differ by more than
-   ``relock_tolerance`` (30 %: a subharmonic, a lost lock), hand over again;
+   ``relock_tolerance`` (30 %: a subharmonic, a lost lock), or by more than
+   ``change_relock_tolerance`` (2 %) within ``change_relock_periods`` of a change of tempo,
+   hand over again;
 2. update the anchor g and amplitude r (mean and sqrt(2) RMS of each DOF over the last
    period of the current Omega), normalise the input -- (y - g) / r once locked, the
    running range before -- and advance the canonical system over the sample interval (AFS,
    or the AFO pool with its logic step) -> phase phi;
 3. the fundamental Omega: the oscillator's frequency averaged over the last period (free
-   of the ripple the coupling term puts on it), restarted at the hand-over;
-4. estimate position, velocity and acceleration by a centred polynomial fit over the last
-   samples and learn the weights with the incremental LWR of eqs. 13-15 from f_targ (text
-   after eq. 12), at points between samples (:func:`update_points`);
+   of the ripple the coupling term puts on it), restarted at the hand-over; the model's
+   frequency: the mean phase rate of the current tempo segment
+   (:mod:`~wipelab.learning.tempo`);
+4. learn the weights: by default fitted to the positions through the DMP's limit cycle
+   (:mod:`~wipelab.learning.position_fit`, recursive least squares with a memory of
+   ``memory_periods``); with ``regression="lwr"`` the paper's incremental LWR of
+   eqs. 13-15 on f_targ (text after eq. 12), from a centred polynomial fit of the last
+   samples (:mod:`~wipelab.learning.derivatives`), at points between samples;
 5. integrate the DMP (eqs. 6-7) with the current weights: the imitated movement (Fig. 5).
-
-Gaps. A sample marked invalid (the tracker lost the sponge) teaches nothing: the canonical
-system runs on at its frequency without coupling or learning, the detector restarts, and no
-regression update uses a derivative window that holds the gap; the DMP keeps moving. Fed
-the tracker's straight-line bridge as data instead, the fundamental swung 49 % off after a
-1.5-period gap (10 % gap-aware) and the waveform error grew from 1.4 to 1.7 % of
-peak-to-peak (test_online.py); over the
-benchmark's 27 human-like demonstrations, 5 model frequencies ended more than 1 % off
-(worst 1.4 %), none gap-aware.
-
-The model's frequency is the canonical phase's mean rate over the last 40 periods since the
-last hand-over (:func:`model_frequency_hz`): a person's tempo wanders by several percent from
-stroke to stroke, the fundamental follows it, and its value at the end of a demonstration is
-only the tempo of the last strokes (up to 8 % off on the benchmark's human-like
-demonstrations). Over 27 of those (60 s with two 1.5 s gaps) the model frequency is within
-0.72 % of the nominal (median 0.22 %; the fundamental of the last period: 9 of 27 within 1 %,
-worst 9.7 %); the price is that after a deliberate change of tempo the
-model frequency mixes the two until 40 periods have passed (the history's fundamental follows
-within about three).
 
 :class:`OnlineLearner` is the one implementation: ``step`` (one sample, as a live session
 calls it) and ``process`` (many, in a compiled loop) run the same compiled step
-(:mod:`wipelab.learning.online_kernel`). The model's frequency is per tempo segment
-(:mod:`wipelab.learning.tempo`), and by default the weights are fitted to positions through
-the limit cycle (:mod:`wipelab.learning.position_fit`); the numbers below about eqs. 13-15
-are for ``regression="lwr"``. Issue 11's numbers (held-out demonstrations of
-:mod:`wipelab.learning.demonstrator`) are in ``benchmarks/bench_learn.py``.
+(:func:`~wipelab.learning.online_kernel.learner_step`).
 
-All numbers below are from ``benchmarks/bench_learn.py`` (two DOFs with 2nd and 3rd
-harmonics and 2 % noise; 0.3, 0.5, 1, 2, 3 Hz at 30 and 500 Hz; worst of two noise seeds)
-unless stated otherwise.
+Gaps. A sample marked invalid (the tracker lost the sponge) teaches nothing: the canonical
+system runs on at its frequency without coupling or learning, the detector restarts, and no
+regression update uses it; the DMP keeps moving. Fed the tracker's straight-line bridge as
+data instead, the fundamental swung 49.5 % off after a 1.5-period gap (10.4 % gap-aware;
+the setup of ``test_a_gap_teaches_nothing_and_the_oscillator_runs_through_it`` in
+``tests/learning/test_online.py``), and over the benchmark's 27 human-like demonstrations
+5 model frequencies ended more than 1 % off (worst 1.38 %), none gap-aware (worst 0.68 %).
+
+Numbers below are printed by ``benchmarks/bench_learn.py``: on its signals (two DOFs with
+2nd and 3rd harmonics and 2 % noise; 0.3, 0.5, 1, 2, 3 Hz at 30 and 500 Hz; worst of two
+noise seeds) unless stated otherwise; issue 11's tables (a)-(c) are on held-out
+demonstrations of :mod:`wipelab.learning.demonstrator`.
 
 Default canonical system: the AFS. With the start-up detector both systems stay within 1 %
 of the fundamental from the hand-over on, after 1.95-2.30 periods (AFS) and 2.11-2.30
-(pool): the start does not decide. After a frequency step both re-converge in about three
-periods (AFS 2.91-3.31, pool 2.56-2.87). The AFS is better elsewhere: its rollout after 10 periods is within
-0.92-1.01 % of peak-to-peak at 500 Hz (pool 1.2-1.3 %); if no period is detected (the
-oscillators alone) it still locks in 3.9-8.7 periods (pool 3.5-11.7); and it needs neither
-the offset trick (the pool's eq. 4 has no constant term) nor the logic step. With the
-published constant gains (K = K_Omega = 20) and no detector, neither settles at most of these
-frequencies (see :mod:`wipelab.learning.oscillators`).
+(pool): the start does not decide, nor does a step of the frequency (re-converged within
+2.05-2.11 periods, pool 2.03-2.11). The AFS is better elsewhere: its model's rollout after 10
+periods is within 0.06-0.22 % of peak-to-peak at 500 Hz (pool 0.71-0.76 %; at 30 Hz
+0.35-1.07 %, pool 0.69-1.16 %); if no period is detected (the oscillators alone) it still
+locks in 3.9-8.7 periods (pool 3.5-11.7); and it needs neither the offset trick (the pool's
+eq. 4 has no constant term) nor the logic step. With the published constant gains
+(K = K_Omega = 20) and no detector, neither settles at most of these frequencies (see
+:mod:`wipelab.learning.oscillators`). On the 27 human-like demonstrations (60 s, two 1.5 s
+gaps) the model frequency is within 0.68 % of the nominal (median 0.18 %; the pool 0.51 %).
 
-Departures from the paper, each measured there:
+Departures from the paper:
 
 * the start-up detector and the hand-over (step 1): the oscillators alone take 3.9-8.7
-  periods (median 5.2) to stay within 1 %, and about 3.5 even when started at the right
-  frequency, because phase and series start from nothing. The hand-over refines the
-  detector's frequency by the fit (+- 1 %) and advances the phase by one oscillator substep
-  (an Euler substep compares the input at its end with the series at its start, so a
-  settled oscillator leads by one substep); without that lead a freshly locked AFS at 3 Hz
-  sampled at 30 Hz swung up to 1 % off, with it the fundamental stays within 0.5 % of the
-  truth after the hand-over (AFS; pool 0.6 %; 30 noise seeds x 5 cases);
+  periods (median 5.2) to stay within 1 %, because phase and series start from nothing.
+  The hand-over refines the detector's frequency by the fit (within ``lock_search``) and
+  advances the phase by one oscillator substep: an Euler substep compares the input at its
+  end with the series at its start phase, so a settled oscillator leads by one substep;
 * after the hand-over the input is normalised by the period statistics instead of the
-  running range: the range's relaxation (tau = 10 s) modulates the input's scale within
-  each period and kicked a freshly locked oscillator off by up to 4 %;
+  running range, whose relaxation (tau = 10 s) modulates the input's scale within each
+  period (:mod:`wipelab.learning.normalise`);
 * the detector keeps running as a supervisor and re-locks (step 1): a safety net for a lost
-  lock or a subharmonic. On the 27 human-like demonstrations of the benchmark it re-locked
-  once (worst model frequency 0.72 %, 0.47 % without the supervisor); with the gain schedule
-  of :mod:`wipelab.learning.oscillators` (kappa = 100, off by default) it kept 23 of 27
-  within 1 %, against 16 without it (worst 88 %);
-* the recursion of eqs. 13-15 regresses f_targ / r on 1 instead of f_targ on r: the same fit,
-  but the prior P0 = 1 then weighs the same whatever the unit of r (with r in metres it
-  outweighed ten periods of data at 30 Hz and halved the learned waveform);
-* lambda counts per 1/100 of a period rather than per sample (:func:`forgetting_factor`);
-* the regression is updated between samples, at most half a kernel spacing apart in phase,
-  from the same local polynomial (:func:`update_points`): at 3 Hz sampled at 30 Hz (ten
-  phases per period for 25 kernels) the rollout error after 10 periods drops from 3.7 % to
-  2.0 % of peak-to-peak, at 2 Hz from 2.4 % to 2.0 %; at 500 Hz one update per sample
-  already suffices.
+  lock or a subharmonic. On the 27 human-like demonstrations the default learner needs it
+  little (worst 0.68 % with it or without); with the gain schedule of
+  :mod:`wipelab.learning.oscillators` (kappa = 100, off by default) it kept 21 of 27
+  within 1 % (worst 11.9 %), against 17 without it (worst 88 %);
+* the model's frequency is per tempo segment, not the last Omega: the fundamental of the
+  last period was within 1 % on 2 of the 27 (worst 10.9 %); a +-30 % step of tempo is
+  followed within 2.6 periods (table (b), 60 held-out steps; the 40-period mean without
+  segments: not within the 15 periods after the step);
+* the weights are fitted to positions (step 4): after 10 periods the rollout is within
+  0.35-1.07 % of peak-to-peak at 30 Hz and 0.06-0.22 % at 500 Hz, against 0.93-2.06 % and
+  0.92-1.01 % for eqs. 13-15 on f_targ (on the held-out demonstrations, table (c): worst
+  1.14 % against 2.68 %);
+* with ``regression="lwr"``: the recursion of eqs. 13-15 regresses f_targ / r on 1 instead
+  of f_targ on r (the same fit, but the prior P0 = 1 then weighs the same whatever the unit
+  of r); lambda counts per 1/100 of a period rather than per sample; and the regression is
+  updated between samples, at most half a kernel spacing apart in phase, from the same
+  local polynomial: at 3 Hz sampled at 30 Hz (ten phases per period for 25 kernels) the
+  rollout error after 10 periods drops from 3.80 % to 2.06 % of peak-to-peak, at 2 Hz from
+  2.40 % to 2.05 %; at 500 Hz one update per sample already suffices.
 
-With them the rollout after 10 periods is within 1.0 % of the noise-free waveform's
-peak-to-peak at 0.3-3 Hz and 500 Hz, and within 2.1 % at 30 Hz.
+Cost: ``step`` about 24 us of CPU per sample at 30 Hz (3 DOFs; 13 us at 500 Hz), ``process``
+21 us (10 us); the benchmark's speed table, measured at a load average of 9 on 2 cores.
 """
 
 from __future__ import annotations
@@ -108,7 +105,7 @@ from wipelab.learning.kernels import default_width, kernel_centres
 from wipelab.learning.model import PeriodicModel
 from wipelab.learning.normalise import new_period_window, new_running_range
 from wipelab.learning.online_kernel import (AFO, AFS, LWR, POSITIONS, KernelSettings,
-                                           LearnerState, learner_run, learner_step)
+                                           LearnerState, learner_run, step_entry_point)
 from wipelab.learning.oscillators import DOF_COUPLINGS, substep_count
 from wipelab.learning.period_detector import PeriodDetectorParameters, new_detector
 from wipelab.learning.position_fit import new_position_fit
@@ -326,13 +323,18 @@ class OnlineLearner:
         self.n_dofs = n_dofs
         self.settings = kernel_settings(n_dofs, dt, params, reference_dof)
         self.state = new_learner_state(n_dofs, dt, params, self.settings)
+        self._step = None      # the compiled step's entry point, resolved at the first step
 
     def step(self, y, valid: bool = True) -> np.ndarray:
         """Learn from one sample y (d,) in m (a placeholder when not ``valid``: the input was
         not observed; it teaches nothing, the canonical system runs on at its frequency);
         return the learned movement at the same time (d,), m (the learner's own array)."""
-        learner_step(self.settings, self.state, np.ascontiguousarray(y, dtype=np.float64),
-                     bool(valid))
+        y = np.ascontiguousarray(y, dtype=np.float64)
+        if y.shape != (self.n_dofs,):
+            raise ValueError(f"y must have shape ({self.n_dofs},), got {y.shape}")
+        if self._step is None:
+            self._step = step_entry_point(self.settings, self.state)
+        self._step(self.settings, self.state, y, bool(valid))
         return self.state.output
 
     def process(self, Y, valid=None, every: int = 1) -> dict:

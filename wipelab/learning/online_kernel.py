@@ -19,13 +19,14 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, typeof, types
 
 from wipelab.learning.afo import pool_fundamental, pool_lock, pool_logic_step, pool_substep
 from wipelab.learning.afs import afs_lock, afs_substep
-from wipelab.learning.derivatives import MIN_WINDOW, evaluate_polynomial
+from wipelab.learning.derivatives import MIN_WINDOW, evaluate_polynomial, window_for
 from wipelab.learning.dmp import dmp_step, forcing_target
 from wipelab.learning.harmonic import locked_series
+from wipelab.learning.kernels import activations
 from wipelab.learning.lwr import lwr_update
 from wipelab.learning.normalise import (PeriodWindow, RunningRange, period_statistics,
                                         running_normalise)
@@ -231,9 +232,7 @@ def _learn_lwr(settings: KernelSettings, state: LearnerState, y, phase: float, o
     state.value_omegas[slot] = omega
     if not valid:
         return
-    samples = settings.window_periods * 2.0 * math.pi / (max(omega, 1e-12) * dt)
-    window = 2 * int(round((samples - 1.0) / 2.0)) + 1
-    window = min(max(window, MIN_WINDOW), max_window)
+    window = window_for(omega, dt, settings.window_periods, max_window)
     if state.valid_run[0] < window:                   # a gap in the window
         return
     points = 1
@@ -263,8 +262,7 @@ def _learn_lwr(settings: KernelSettings, state: LearnerState, y, phase: float, o
         value, slope, curvature = evaluate_polynomial(coefficients, x)
         target = forcing_target(value, slope / dt, curvature / (dt * dt), omega_c, state.goal,
                                 settings.alpha_s, settings.beta_s) / state.amplitude
-        for i in range(n_kernels):
-            psi[i] = math.exp(settings.width * (math.cos(phase_c - settings.centres[i]) - 1.0))
+        activations(phase_c, settings.centres, settings.width, psi)
         # f_targ ~ w r, regressed in units of r: the prior P0 = 1 then weighs the same for
         # any scale of the movement.
         lwr_update(psi, ones, target, forgetting, state.weights, state.lwr_P)
@@ -357,6 +355,19 @@ def learner_step(settings: KernelSettings, state: LearnerState, y, valid: bool) 
                  previous_phase, previous_omega, dt, settings.max_phase_step,
                  f0[:y.shape[0]], f_mid[:y.shape[0]], f1[:y.shape[0]])
     state.count[0] = count + 1
+
+
+def step_entry_point(settings: KernelSettings, state: LearnerState):
+    """:func:`learner_step` compiled for these settings and state (and y float64 (d,)
+    contiguous, valid bool), as a function that skips numba's dispatch.
+
+    A call through the dispatcher types every argument first: for the ~70 arrays of the
+    state that is most of the cost of one sample (measured in ``benchmarks/bench_learn.py``).
+    The entry point only unboxes them; it must be given arguments of exactly these types
+    (``OnlineLearner.step`` checks y).
+    """
+    return learner_step.compile((typeof(settings), typeof(state), types.float64[::1],
+                                 types.boolean))
 
 
 @njit(cache=True)

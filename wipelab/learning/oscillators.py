@@ -12,19 +12,18 @@ s^2 + k s + k = 0 (k = K A / 2) keeps a pole near -1 rad/s however large K is.
 Gain schedule after the lock (off by default: c_L = 1, kappa = 0). Once a canonical system
 has been locked onto a detected period (its ``lock`` method), its coupling gains K and
 K_Omega can be multiplied by c_L + kappa E, where E is the fit residual (mean e^2 over the
-DOFs, low-passed over about a period; 2-5e-4 with 2 % noise when the series fits): a weaker
-coupling when converged, a stronger one when the movement changes. On the clean signals of
-``benchmarks/bench_learn.py`` the AFS with c_L = 0.5, kappa = 100 re-converges after a
-frequency step in 2.06-2.24 instead of 2.91-3.31 periods. On human-like demonstrations (a
-wandering tempo, drifting amplitude and centre, two gaps; same benchmark) the residual stays
-large, the coupling grows tenfold and the AFS drifts to subharmonics: 4 of 27 model
-frequencies more than 1 % off (worst 18 %) with the supervisor of
-:mod:`wipelab.learning.online`, 11 (worst 88 %) without; with kappa = 30 all 27 within
-0.79 %, without the schedule within 0.72 %. Robustness on people's movements decides: off.
-The pool, with lower gains (K_Omega = 6), is also best without it: after a step 2.6-2.9
-periods, 5.2-5.9 with c_L = 0.5, 3.2-3.3 with kappa = 50. Before the lock the schedule never
-applies: with the large residual of an unlocked oscillator it made the fallback (no period
-detected) slower and less stable (kappa = 100: up to 11 periods, or no lock).
+DOFs, low-passed over about a period): a weaker coupling when converged, a stronger one when
+the movement changes. Measured in ``benchmarks/bench_learn.py``: on its clean signals the
+AFS with c_L = 0.5, kappa = 100 re-converges after a frequency step in 2.06-2.17 periods,
+the default in 2.05-2.11 (the change-of-tempo re-lock of :mod:`wipelab.learning.online`
+does the work). On the 27 human-like demonstrations (a wandering tempo, drifting amplitude
+and centre, two gaps) the residual stays large, the coupling grows and the AFS drifts to
+subharmonics: 6 of 27 model frequencies more than 1 % off (worst 11.9 %) with the
+supervisor, 10 (worst 88 %) without; with kappa = 30 all 27 within 0.94 %, without the
+schedule within 0.68 %. Robustness on people's movements decides: off. A weaker coupling
+alone (c_L = 0.7) smooths Omega after a lock (noise and drift make it wobble) but slows the
+re-convergence after a clean frequency step to 3.00-3.12 periods (the same table): off as
+well. Before the lock the schedule never applies.
 
 Several DOFs share one phase. The *reference* DOF defines it: its component at an
 oscillator's frequency is a pure cosine of that oscillator's phase (the beta coefficient is

@@ -130,17 +130,23 @@ def add_block(blocks: np.ndarray, sums: np.ndarray, pairs: np.ndarray, n_blocks:
         The new block average (m).
     """
     capacity, n_dofs = blocks.shape
-    blocks[n_blocks % capacity] = block
+    head = n_blocks % capacity
+    blocks[head] = block
+    # Slots are found by stepping back from the head (capacity exceeds every span compared):
+    # no division per lag.
+    older = head
     for tau in range(1, min(n_blocks, sums.shape[0] - 1) + 1):
-        older = blocks[(n_blocks - tau) % capacity]
+        older = older - 1 if older > 0 else capacity - 1          # block n_blocks - tau
         total = 0.0
         for j in range(n_dofs):
-            total += (block[j] - older[j]) ** 2
-        leaving = n_blocks - pairs[tau]                     # the pair that leaves the window
-        if leaving - tau >= 0:
-            first, second = blocks[leaving % capacity], blocks[(leaving - tau) % capacity]
+            total += (block[j] - blocks[older, j]) ** 2
+        if n_blocks - pairs[tau] - tau >= 0:                # a pair leaves the window
+            first = head - pairs[tau]                       # block n_blocks - W(tau)
+            first = first + capacity if first < 0 else first
+            second = first - tau
+            second = second + capacity if second < 0 else second
             for j in range(n_dofs):
-                total -= (first[j] - second[j]) ** 2
+                total -= (blocks[first, j] - blocks[second, j]) ** 2
         sums[tau] += total
 
 

@@ -12,13 +12,16 @@ with z = (y - g) / r per DOF, each sample weighted by the phase dphi it advances
 is the same at any sample rate), lambda = exp(-dphi / (2 pi memory)) (a memory in periods)
 and Lambda the penalty of :func:`~wipelab.learning.batch_fit.smoothness_penalty`, added at the
 same rate as the data so that its weight relative to them is the offline one at every time.
-The weights come from a Cholesky solve of R (N x N) after each update: a few microseconds
-for N = 25.
+The weights come from a Cholesky solve of R (N x N) after each update (the DMP integrates
+with them at every sample).
 
 Compared with the paper's eqs. 13-15 on f_targ (:mod:`wipelab.learning.lwr`, selectable as
 ``OnlineParameters(regression="lwr")``) it needs no derivative window, so it learns each
 sample at once at its own phase instead of half a window late, and it does not amplify the
-noise by differentiating twice (measured in ``benchmarks/bench_learn.py``).
+noise by differentiating twice: after 10 periods of the signals of
+``benchmarks/bench_learn.py`` (waveform table) the rollout is within 0.35-1.07 % of
+peak-to-peak at 30 Hz and 0.06-0.22 % at 500 Hz, against 0.93-2.06 % and 0.92-1.01 % with
+eqs. 13-15.
 """
 
 from __future__ import annotations

@@ -2,21 +2,26 @@
 
 A person's tempo wanders by several percent from stroke to stroke, and the canonical system
 follows it: its frequency at the end of a demonstration is only the tempo of the last
-strokes (up to 8 % off the mean on the human-like demonstrations of
-``benchmarks/bench_learn.py``). The phase advance over many periods gives the demonstrated
-frequency: the model's frequency is the canonical phase's mean rate over the last
-``window_periods`` periods of the current *tempo segment*.
+strokes (the fundamental of the last period: up to 10.9 % off the nominal on the 27
+human-like demonstrations of ``benchmarks/bench_learn.py``). The phase advance over many
+periods gives the demonstrated frequency: the model's frequency is the canonical phase's mean
+rate over the last ``window_periods`` periods of the current *tempo segment*.
 
-A person also speeds up and slows down on purpose. Averaged over 40 periods, a change of
-tempo took 40 periods to be learned (0.8 -> 1.3 Hz: still 1 % off 30 s later). So the
+A person also speeds up and slows down on purpose. Averaged over 40 periods without
+segments, a change of tempo is learned only after tens of periods (table (b) of the
+benchmark: not within 1 % in the 15 periods after a +-30 % step). So the
 segment restarts at a change of tempo, found by a change-point test on the per-period
 frequency: the period boundaries are the times the canonical phase passes a multiple of
 2 pi; when each of the last ``change_periods`` periods is faster (or each slower) than the
-segment's mean before them by more than a factor 1 + ``change_threshold``, the segment restarts at the
-first of them -- retroactively, so that the mean after a change is taken over the new tempo
-only, from its start. Before ``min_periods`` periods of the segment (and of data) exist, the
-fundamental of the last period stands in. The stroke-to-stroke wander of a person (a few
-percent) stays far below the threshold; a change of 30 % is found two periods after it.
+segment's mean before them by more than a factor 1 + ``change_threshold``, the segment restarts
+at the boundary where the change is found. Not retroactively at the first changed period:
+there the canonical phase was still catching up with the new tempo, and its offset from the
+person's phase biased the segment's mean for many periods (in development, some +-30 %
+steps never came within 1 %; on held-out demonstrations every one of 60 does within 2.6
+periods: ``benchmarks/bench_learn.py``, table (b)). Before ``min_periods`` periods of the
+segment (and of data) exist, the fundamental of the last period stands in. The
+stroke-to-stroke wander of a person (a few percent) stays far below the threshold; a change
+of 30 % is found two periods after it.
 """
 
 from __future__ import annotations
@@ -139,7 +144,7 @@ def tempo_update(state: TempoState, settings: TempoSettings, time: float, phase:
         state.next_phase[0] = crossing + 2.0 * math.pi
         state.segment[0] = max(state.segment[0], state.count[0] - capacity + 1)
         if _test_change(state, settings):
-            state.segment[0] = state.count[0] - 1 - settings.change_periods
+            state.segment[0] = state.count[0] - 1
             state.changes[0] += 1
     state.previous[0] = time
     state.previous[1] = phase
