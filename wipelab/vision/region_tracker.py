@@ -59,9 +59,14 @@ class RegionTrackerParams:
         distance it may move in a frame).
     min_area_ratio, max_area_ratio : float
         A valid region's area, in square metres at the sponge's distance (so that moving
-        nearer or farther does not change it), relative to its median over the last valid
-        frames: a hand passing in front shrinks it, a thing of the same colour joining it
-        grows it.
+        nearer or farther does not change it), must lie within these factors of its median
+        over the last valid frames, or within ``area_margin`` of the range it has spanned
+        (the 2nd to 98th percentile; the sponge turning, the holding hand moving on it):
+        a hand passing in front shrinks it, a thing of the same colour joining it grows it.
+    area_margin : float
+    area_floor, area_ceiling : float
+        Whatever the range spanned, a valid region's area stays within these factors of the
+        median.
     max_ray_disagreement : float
         Largest change, in multiples of the sponge size, of the offset between the two
         cameras' rays on the plane from its running median.
@@ -86,6 +91,9 @@ class RegionTrackerParams:
     window_size: float = 1.0
     min_area_ratio: float = 0.8
     max_area_ratio: float = 1.25
+    area_margin: float = 0.1
+    area_floor: float = 0.5
+    area_ceiling: float = 2.0
     max_ray_disagreement: float = 0.12
     coast_frames: int = 6
     acquisition: AcquisitionParams = AcquisitionParams()
@@ -210,7 +218,7 @@ class RegionTracker:
         self._table_points: list[np.ndarray] = []  # dense stereo points of the table pairs
         self._table_centre: np.ndarray | None = None
         self.ray_offsets: deque[np.ndarray] = deque(maxlen=90)
-        self.areas = [deque(maxlen=45), deque(maxlen=45)]  # metric areas of valid frames
+        self.areas = [deque(maxlen=120), deque(maxlen=120)]  # metric areas of valid frames
         self.history: deque[tuple[int, np.ndarray]] = deque(maxlen=3)
         self.failures = 0
         self.valid_count = 0
@@ -462,8 +470,12 @@ class RegionTracker:
                                  for area, view in zip(areas, self.views)])
         for k in range(2):
             if not problems[k] and len(self.areas[k]) >= 5:
-                ratio = metric_areas[k] / np.median(self.areas[k])
-                if not p.min_area_ratio <= ratio <= p.max_area_ratio:
+                low, median, high = np.percentile(self.areas[k], [2, 50, 98])
+                ratio = metric_areas[k] / median
+                lowest = max(p.area_floor, min(p.min_area_ratio, (1 - p.area_margin) * low / median))
+                highest = min(p.area_ceiling, max(p.max_area_ratio,
+                                                  (1 + p.area_margin) * high / median))
+                if not lowest <= ratio <= highest:
                     problems[k] = f"{ratio:.2f}x its usual area"
         stereo = np.full(3, np.nan)
         if np.all(np.isfinite(rays)):

@@ -73,7 +73,7 @@ class StaticBackground:
                          borderMode=cv2.BORDER_CONSTANT)
 
     def initialise(self, images: np.ndarray, positive: np.ndarray,
-                   persistence: float = 0.5) -> None:
+                   persistence: float = 0.85) -> None:
         """Start from a stack of recent frames (:meth:`canvas_image`, (m, h, w, 3)) and
         where each showed the sponge's colour ((m, h, w) bool), taken before the sponge
         was known: the background is their per-pixel median, and the still things of the
