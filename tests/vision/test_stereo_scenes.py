@@ -17,6 +17,7 @@ from tests.stereo_scenes import __main__ as scenes_cli
 from tests.stereo_scenes import plan_scene, render_scene
 from tests.stereo_scenes.camera import Camera, Canvas, look_at
 from tests.stereo_scenes.lens import distort, monotonic_radius, undistort
+from tests.stereo_scenes.motion import RAMP_S, WipingMotion
 from tests.stereo_scenes.plan import NAMED_HSV, Video
 from tests.stereo_scenes.video import VideoFile
 from wipelab.vision.calibration import load_calibration
@@ -199,10 +200,10 @@ def test_every_codec_is_deterministic_and_read_back_by_opencv(codec, writer, tmp
 
 
 def test_overrides_set_factors_and_unknown_ones_are_refused():
-    plan = plan_scene(10000, small=True, pattern="figure8", frequency_hz=1.5, colour="blue")
+    plan = plan_scene(1234, small=True, pattern="figure8", frequency_hz=1.5, colour="blue")
     assert (plan.motion.pattern, plan.motion.frequency_hz, plan.sponge.colour) == \
         ("figure8", 1.5, "blue")
-    other = plan_scene(10000, small=True)
+    other = plan_scene(1234, small=True)
     assert plan.cameras == other.cameras or plan.motion.pattern != other.motion.pattern
     assert plan.table.height == other.table.height
     with pytest.raises(ValueError, match="unknown scene override"):
@@ -213,3 +214,21 @@ def test_cli_refuses_an_existing_directory(tmp_path, capsys):
     assert scenes_cli.main([str(tmp_path), "--seed", "1", "--small"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and "already exists" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("pattern", ["circle", "line", "figure8", "ellipse"])
+def test_motion_keeps_the_nominal_frequency_and_the_sponge_on_the_table(pattern):
+    motion = WipingMotion(pattern, 1.1, 0.3, 0.6, (0.7, 0.1), 0.4, 0.8, np.array([0.05, 0.03, 0.02]),
+                          0.2, 0.5, 40.0, np.random.default_rng(5))
+    start = 0.5 + RAMP_S
+    t = np.arange(start, 40.0, 0.01)
+    rate = np.gradient(motion.phase(t), t) / (2 * np.pi)
+    assert (motion.phase(40.0) - motion.phase(start)) / (2 * np.pi) / (40.0 - start) == \
+        pytest.approx(1.1, rel=1e-3)
+    assert 0.0 < np.abs(rate / 1.1 - 1).max() < 0.07        # the tempo wanders, about +-5 %
+    assert np.ptp(motion.phase(np.arange(0.0, 0.5, 0.01))) == 0.0   # still at the start
+    centre, R, _ = motion.pose(t[::10])
+    lowest = centre[:, 2] - np.einsum("nij,j->n", np.abs(R[:, 2:3, :]), [0.05, 0.03, 0.02])
+    assert np.allclose(lowest, 0.8, atol=1e-12)               # the bottom touches the table
+    along = (centre[:, :2] - [0.7, 0.1]) @ [np.cos(0.4), np.sin(0.4)]
+    assert 0.25 < np.ptp(along) < 0.36                        # 0.3 m across, with drift
