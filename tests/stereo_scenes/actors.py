@@ -222,7 +222,14 @@ def free_arm(event, t: float, sponge_centre, eye_mid, camera_right, person) -> l
     sleeve = person.sleeve_bgr if person.sleeve == "long" else person.skin_bgr
     extra = 0.008 if person.sleeve == "long" else 0.0
     skin = person.skin_bgr
-    return [Limb(shoulder, elbow, 0.05 * s, 0.043 * s, person.shirt_bgr),
-            Limb(elbow, wrist, (0.038 + extra) * s, (0.029 + extra) * s, sleeve),
-            Limb(wrist, wrist + 0.08 * s * axis, 0.03 * s, 0.042 * s, skin),
-            Limb(wrist + 0.08 * s * axis, wrist + 0.15 * s * axis, 0.038 * s, 0.03 * s, skin)]
+    knuckles = wrist + 0.085 * s * axis
+    limbs = [Limb(shoulder, elbow, 0.05 * s, 0.043 * s, person.shirt_bgr),
+             Limb(elbow, wrist, (0.038 + extra) * s, (0.029 + extra) * s, sleeve),
+             Limb(wrist, knuckles, 0.03 * s, 0.036 * s, skin),
+             Limb(wrist + 0.03 * s * (axis + up), wrist + 0.07 * s * axis + 0.06 * s * up,
+                  0.011 * s, 0.009 * s, skin)]                                 # thumb
+    for spread in (-1.5, -0.5, 0.5, 1.5):
+        base = knuckles + spread * 0.018 * s * up
+        tip = base + (0.075 - 0.008 * abs(spread)) * s * _unit(axis + 0.08 * spread * up)
+        limbs.append(Limb(base, tip, 0.0095 * s, 0.008 * s, skin))             # fingers
+    return limbs
