@@ -94,8 +94,9 @@ class Painter:
             if self.facing(poly.mean(axis=0), normal):
                 self.polygon(poly, self.light.shade(colour, normal))
 
-    def silhouette(self, points_world: np.ndarray, target: np.ndarray, value=255):
-        """Fills the convex hull of projected points (in front of the camera) into ``target``."""
+    def silhouette(self, points_world: np.ndarray, target: np.ndarray | None, value=255):
+        """Fills the convex hull of projected points (in front of the camera) into ``target``
+        (the image when None)."""
         pixels = self.to_pixels(points_world)
         hull = cv2.convexHull(pixels.astype(np.float32))[:, 0, :]
         self.fill_pixels(hull, value, target)
@@ -166,6 +167,19 @@ class Painter:
         shift = towards * radius * 0.35
         self.fill_pixels(self._sphere_outline(centre + shift, radius * 0.7, 24),
                          self.light.shade(colour, view))
+
+    def ellipsoid(self, body):
+        """A shaded ellipsoid (``actors.Ellipsoid``): its outline, then a lit inner patch."""
+        points = body.surface_points()
+        if np.any(self.canvas.camera.to_camera(points)[:, 2] < NEAR):
+            return
+        view = self.eye - body.centre
+        view /= np.linalg.norm(view)
+        self.silhouette(points, None, self.light.shade(body.colour, view * 0.55))
+        towards = self.light.direction - view * np.dot(self.light.direction, view)
+        inner = body.centre + 0.3 * (towards * body.radii.min()) + \
+            (points - body.centre) * 0.62
+        self.silhouette(inner, None, self.light.shade(body.colour, 0.35 * view + 0.65 * self.light.direction))
 
     # -- textured planes -----------------------------------------------------------------
     def textured_plane(self, texture: np.ndarray, texture_to_world: np.ndarray,
