@@ -21,7 +21,7 @@ Usage::
     render_scene("out/small7", seed=7, small=True)            # 320x240, a few seconds
     render_scene("out/s", seed=10003, pattern="figure8", frequency_hz=1.5)
 
-    python -m tests.stereo_scenes OUT_DIR --seed N [--duration S] [--small]
+    python -m tests.stereo_scenes OUT_DIR --seed N [--duration S] [--small] [--set FACTOR=VALUE]
     python -m tests.stereo_scenes.gallery OUT.png --seeds 0-11
 """
 

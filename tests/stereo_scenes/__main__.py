@@ -1,8 +1,11 @@
-"""``python -m tests.stereo_scenes OUT_DIR --seed N [--duration S] [--small]``: one scene."""
+"""``python -m tests.stereo_scenes OUT_DIR --seed N [--duration S] [--small] [--set K=V ...]``:
+one scene; ``--set`` overrides a factor (see :mod:`tests.stereo_scenes.plan`), e.g.
+``--set pattern=figure8 --set frequency_hz=1.5 --set codec=mjpg``."""
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 
@@ -18,13 +21,25 @@ def main(argv=None) -> int:
     parser.add_argument("--duration", type=float, default=None, help="seconds (default: 32, "
                         "or 2.5-5 with --small)")
     parser.add_argument("--small", action="store_true", help="320x240, a few seconds")
+    parser.add_argument("--set", action="append", default=[], metavar="FACTOR=VALUE",
+                        help="override a factor (JSON value or text), repeatable")
     args = parser.parse_args(argv)
+    overrides = {}
+    for item in args.set:
+        name, sep, text = item.partition("=")
+        if not sep or not name:
+            print(f"error: --set: expected FACTOR=VALUE, got {item!r}", file=sys.stderr)
+            return 2
+        try:
+            overrides[name] = json.loads(text)
+        except json.JSONDecodeError:
+            overrides[name] = text
     if args.duration is not None and not args.duration > 0:
         print("error: --duration: must be positive", file=sys.stderr)
         return 2
     start = time.perf_counter()
     try:
-        path = render_scene(args.out_dir, args.seed, args.duration, args.small)
+        path = render_scene(args.out_dir, args.seed, args.duration, args.small, **overrides)
     except (FileExistsError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

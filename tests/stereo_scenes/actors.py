@@ -82,6 +82,31 @@ def two_link_elbow(shoulder, wrist, upper, fore, pole) -> tuple[np.ndarray, np.n
 
 
 @dataclass
+class Ellipsoid:
+    """An ellipsoid (the back of a hand): ``centre`` (3,), ``axes`` (3, 3) unit columns,
+    ``radii`` (3,) metres along them."""
+
+    centre: np.ndarray
+    axes: np.ndarray
+    radii: np.ndarray
+    colour: tuple
+
+    def surface_points(self) -> np.ndarray:
+        """Points (n, 3) spread over the surface (enough for its outline)."""
+        return self.centre + (UNIT_SPHERE * self.radii) @ self.axes.T
+
+
+def _unit_sphere(rings: int = 7, segments: int = 16) -> np.ndarray:
+    polar = np.linspace(0, np.pi, rings)[:, None]
+    azimuth = np.linspace(0, 2 * np.pi, segments, endpoint=False)[None, :]
+    return np.stack([np.sin(polar) * np.cos(azimuth), np.sin(polar) * np.sin(azimuth),
+                     np.cos(polar) * np.ones_like(azimuth)], axis=-1).reshape(-1, 3)
+
+
+UNIT_SPHERE = _unit_sphere()
+
+
+@dataclass
 class HoldingHand:
     """The holding arm and hand for one sponge pose.
 
@@ -90,7 +115,8 @@ class HoldingHand:
     """
 
     arm: list           # upper arm, forearm (drawn after the sponge)
-    hand: list          # wrist, palm (drawn after the sponge)
+    hand: list          # wrist (drawn after the sponge)
+    palm: Ellipsoid     # the back of the hand on the top face
     fingers: list
 
 
@@ -122,14 +148,12 @@ def holding_hand(person, sponge_model: SpongeModel, centre, R, table_z: float) -
         return R @ p + centre
 
     skin = person.skin_bgr
-    hand = []
-    for side in (-1, 1):
-        base = palm + side * 0.017 * s * l_local + [0, 0, palm_r * 0.75]
-        hand.append(Limb(world(base - 0.032 * s * f_local), world(base + 0.022 * s * f_local),
-                         palm_r, palm_r * 0.95, skin))
+    back = Ellipsoid(world(palm + [0, 0, 0.017 * s]),
+                     R @ np.column_stack([f_local, l_local, [0, 0, 1.0]]),
+                     np.array([0.047, 0.042, 0.019]) * s, skin)
     wrist = palm - 0.075 * s * f_local + [0, 0, 0.032 * s]
-    hand.insert(0, Limb(world(wrist), world(palm - 0.03 * s * f_local + [0, 0, palm_r]),
-                        0.026 * s, 0.028 * s, skin))
+    hand = [Limb(world(wrist), world(palm - 0.03 * s * f_local + [0, 0, palm_r]),
+                 0.026 * s, 0.028 * s, skin)]
 
     fingers = []
     finger_r = 0.0085 * s
@@ -155,7 +179,7 @@ def holding_hand(person, sponge_model: SpongeModel, centre, R, table_z: float) -
                                          elbow - shoulder)
     arm = [Limb(shoulder_now, elbow, 0.05 * s, 0.043 * s, person.shirt_bgr),
            Limb(elbow, wrist_w, (0.037 + extra) * s, (0.027 + extra) * s, sleeve)]
-    return HoldingHand(arm, hand, fingers)
+    return HoldingHand(arm, hand, back, fingers)
 
 
 def _finger(start, direction, half, radius, length, colour, world, R):
@@ -222,7 +246,14 @@ def free_arm(event, t: float, sponge_centre, eye_mid, camera_right, person) -> l
     sleeve = person.sleeve_bgr if person.sleeve == "long" else person.skin_bgr
     extra = 0.008 if person.sleeve == "long" else 0.0
     skin = person.skin_bgr
-    return [Limb(shoulder, elbow, 0.05 * s, 0.043 * s, person.shirt_bgr),
-            Limb(elbow, wrist, (0.038 + extra) * s, (0.029 + extra) * s, sleeve),
-            Limb(wrist, wrist + 0.08 * s * axis, 0.03 * s, 0.042 * s, skin),
-            Limb(wrist + 0.08 * s * axis, wrist + 0.15 * s * axis, 0.038 * s, 0.03 * s, skin)]
+    knuckles = wrist + 0.085 * s * axis
+    limbs = [Limb(shoulder, elbow, 0.05 * s, 0.043 * s, person.shirt_bgr),
+             Limb(elbow, wrist, (0.038 + extra) * s, (0.029 + extra) * s, sleeve),
+             Limb(wrist, knuckles, 0.03 * s, 0.036 * s, skin),
+             Limb(wrist + 0.03 * s * (axis + up), wrist + 0.07 * s * axis + 0.06 * s * up,
+                  0.011 * s, 0.009 * s, skin)]                                 # thumb
+    for spread in (-1.5, -0.5, 0.5, 1.5):
+        base = knuckles + spread * 0.018 * s * up
+        tip = base + (0.075 - 0.008 * abs(spread)) * s * _unit(axis + 0.08 * spread * up)
+        limbs.append(Limb(base, tip, 0.0095 * s, 0.008 * s, skin))             # fingers
+    return limbs

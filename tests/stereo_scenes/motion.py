@@ -85,7 +85,7 @@ class WipingMotion:
         self.orientation, self.table_z = float(orientation), float(table_z)
         self.half_extents = np.asarray(half_extents, float)
         self.yaw0, self.still_s = float(yaw0), float(still_s)
-        self.tempo_wander = rng.uniform(0.02, 0.035)      # RMS; peaks near +-5 %
+        self.tempo_wander = rng.uniform(0.03, 0.05)       # peak relative tempo change
         self.amplitude_wander = rng.uniform(0.03, 0.07)
         self.centre_wander = rng.uniform(0.005, 0.015)    # metres RMS
         self.speed_unevenness = rng.uniform(0.0, 0.12)
@@ -109,6 +109,7 @@ class WipingMotion:
         moving = (t >= self.still_s + RAMP_S) & (t <= duration)
         if np.any(moving):
             wander = wander - wander[moving].mean()
+            wander /= max(np.abs(wander[moving]).max(), 1e-12)
         rate = 2 * np.pi * self.frequency_hz * (1.0 + self.tempo_wander * wander) * ramp
         return np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * GRID_S)])
 

@@ -277,7 +277,8 @@ def plan_sponge(rng, o: _Overrides) -> Sponge:
         pad = str(rng.choice(names))
         pad_bgr = hsv_to_bgr(PAD_HSV[pad])
     return Sponge(colour, hsv, hsv_to_bgr(hsv), length, width, height, pad, pad_bgr,
-                  rng.uniform(0.2, 0.4) if two_tone else 0.0, rng.uniform(0.002, 0.006))
+                  rng.uniform(0.2, 0.4) if two_tone else 0.0,
+                  min(rng.uniform(0.0015, 0.004), 0.08 * height))  # the pad shows on the sides
 
 
 def plan_motion(rng, o: _Overrides, sponge: Sponge) -> Motion:

@@ -8,6 +8,7 @@ shaded by a :class:`Light` (Lambert plus ambient).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
@@ -18,7 +19,8 @@ from tests.stereo_scenes.shapes import clip_polygon, perpendicular_axes
 
 SHIFT = 4                 # sub-pixel bits of cv2.fillPoly
 NEAR = 0.02               # metres
-OUTLINE_ANGLES = np.linspace(0, 2 * np.pi, 16, endpoint=False)
+_ANGLES = np.linspace(0, 2 * np.pi, 16, endpoint=False)
+UNIT_CIRCLE = np.column_stack([np.cos(_ANGLES), np.sin(_ANGLES)])
 
 
 @dataclass
@@ -36,8 +38,12 @@ class Light:
 
     def shade(self, colour, normal) -> tuple[float, float, float]:
         """The BGR colour a surface of ``colour`` facing ``normal`` shows."""
-        lit = self.ambient + self.diffuse * max(0.0, float(np.dot(normal, self.direction)))
-        return tuple(float(min(255.0, c * lit * self.gain)) for c in colour)
+        return self.shade_lit(colour, float(np.dot(normal, self.direction)))
+
+    def shade_lit(self, colour, cosine: float) -> tuple[float, float, float]:
+        """The BGR colour of a surface whose normal makes ``cosine`` with the light."""
+        lit = (self.ambient + self.diffuse * max(0.0, cosine)) * self.gain
+        return tuple(min(255.0, c * lit) for c in colour)
 
 
 class Painter:
@@ -57,7 +63,8 @@ class Painter:
     def _clipped(self, polygon_world: np.ndarray) -> np.ndarray | None:
         cam = self.canvas.camera.to_camera(polygon_world)
         if np.all(cam[:, 2] >= NEAR):
-            return self.to_pixels(polygon_world)
+            pixels = self.to_pixels(polygon_world)
+            return pixels if np.abs(pixels).max() < 2 ** 25 else None
         cam = clip_polygon(cam, np.array([0, 0, 1.0]), NEAR)
         if len(cam) < 3:
             return None
@@ -72,9 +79,7 @@ class Painter:
     # -- filling -------------------------------------------------------------------------
     def fill_pixels(self, pixels: np.ndarray, colour, target: np.ndarray | None = None):
         """Fills a polygon given in window pixels (k, 2)."""
-        pts = np.round(pixels * (1 << SHIFT)).astype(np.int32)
-        if np.abs(pts).max() > 2 ** 30:
-            return
+        pts = np.rint(pixels * (1 << SHIFT)).astype(np.int32)
         cv2.fillPoly(self.image if target is None else target, [pts], colour, cv2.LINE_AA, SHIFT)
 
     def polygon(self, polygon_world: np.ndarray, colour, target: np.ndarray | None = None):
@@ -89,8 +94,9 @@ class Painter:
             if self.facing(poly.mean(axis=0), normal):
                 self.polygon(poly, self.light.shade(colour, normal))
 
-    def silhouette(self, points_world: np.ndarray, target: np.ndarray, value=255):
-        """Fills the convex hull of projected points (in front of the camera) into ``target``."""
+    def silhouette(self, points_world: np.ndarray, target: np.ndarray | None, value=255):
+        """Fills the convex hull of projected points (in front of the camera) into ``target``
+        (the image when None)."""
         pixels = self.to_pixels(points_world)
         hull = cv2.convexHull(pixels.astype(np.float32))[:, 0, :]
         self.fill_pixels(hull, value, target)
@@ -104,43 +110,52 @@ class Painter:
 
     def capsule(self, p0, p1, r0, r1, colour, target: np.ndarray | None = None):
         """A tapered capsule (limb, finger) shaded as a cylinder in bands; into ``target``
-        as a plain mask of value ``colour`` when given."""
-        ends = clip_capsule(self.canvas.camera, p0, p1, r0, r1)
+        as a plain mask of value ``colour`` when given. Worked in the camera frame."""
+        camera = self.canvas.camera
+        ends = clip_capsule(camera, p0, p1, r0, r1)
         if ends is None:
             return
         p0, p1, cut0, cut1 = ends
-        uv, z = self.canvas.project(np.array([p0, p1]))
-        radius_px = self.canvas.focal() * np.array([r0, r1]) / z
-        circle = np.stack([np.cos(OUTLINE_ANGLES), np.sin(OUTLINE_ANGLES)], axis=-1)
+        c0, c1 = camera.to_camera(np.array([p0, p1]))
+        K = self.canvas.K
+        focal = 0.5 * (K[0, 0] + K[1, 1])
+        centres = np.array([[K[0, 0] * c0[0] / c0[2] + K[0, 2], K[1, 1] * c0[1] / c0[2] + K[1, 2]],
+                            [K[0, 0] * c1[0] / c1[2] + K[0, 2], K[1, 1] * c1[1] / c1[2] + K[1, 2]]])
+        radius_px = (focal * r0 / c0[2], focal * r1 / c1[2])
         # a cut end has no round cap: its sides end at the cut
-        pts = [uv[i] + radius_px[i] * (0.1 if cut else 1.0) * circle
-               for i, cut in enumerate((cut0, cut1))]
-        axis = p1 - p0
-        length = np.linalg.norm(axis)
-        view = self.eye - 0.5 * (p0 + p1)
-        view /= np.linalg.norm(view)
-        side = np.cross(axis / length, view) if length > 1e-6 else perpendicular_axes(view)[0]
-        if np.linalg.norm(side) < 1e-6:
-            side = perpendicular_axes(axis)[0]
-        side /= np.linalg.norm(side)
-        front = view - np.dot(view, side) * side
-        front /= np.linalg.norm(front)
-        bands = 1 if target is not None else int(np.clip(radius_px.max() / 2.0, 1, 16))
-        edges = np.linspace(-0.97, 0.97, bands + 1)
-        corners = np.concatenate([p0 + r0 * edges[:, None] * side, p1 + r1 * edges[:, None] * side])
-        corner_px = self.to_pixels(corners)
-        rim = np.vstack(pts + [corner_px + self.origin])
-        outline = cv2.convexHull((rim - self.origin).astype(np.float32))[:, 0, :]
+        rim = [centres[0] + radius_px[0] * (0.1 if cut0 else 1.0) * UNIT_CIRCLE,
+               centres[1] + radius_px[1] * (0.1 if cut1 else 1.0) * UNIT_CIRCLE]
+        axis = c1 - c0
+        view = -0.5 * (c0 + c1)                       # the eye is the origin
+        view /= math.sqrt(view @ view)
+        side = _cross(axis, view)
+        norm = math.sqrt(side @ side)
+        if norm < 1e-9:
+            side = perpendicular_axes(view)[0]
+        else:
+            side /= norm
+        front = view - (view @ side) * side
+        front /= math.sqrt(front @ front)
+        bands = 1 if target is not None else int(min(16, max(1, max(radius_px) / 2.0)))
+        edges = np.linspace(-0.97, 0.97, bands + 1)[:, None]
+        corners = np.concatenate([c0 + r0 * edges * side, c1 + r1 * edges * side])
+        corner_px = np.column_stack([K[0, 0] * corners[:, 0] / corners[:, 2] + K[0, 2],
+                                     K[1, 1] * corners[:, 1] / corners[:, 2] + K[1, 2]])
+        rim.append(corner_px)
+        outline = cv2.convexHull((np.vstack(rim) - self.origin).astype(np.float32))[:, 0, :]
         if target is not None:
             self.fill_pixels(outline, colour, target)
             return
-        self.fill_pixels(outline, self.light.shade(colour, front * 0.6))
+        corner_px -= self.origin
+        light = camera.T_cam_world[:3, :3] @ self.light.direction
+        self.fill_pixels(outline, self.light.shade_lit(colour, 0.6 * (front @ light)))
+        side_lit, front_lit = side @ light, front @ light
         n = bands + 1
         for k in range(bands):
-            mid = 0.5 * (edges[k] + edges[k + 1])
-            normal = mid * side + np.sqrt(1 - mid * mid) * front
-            quad = corner_px[[k, n + k, n + k + 1, k + 1]]
-            self.fill_pixels(quad, self.light.shade(colour, normal))
+            mid = 0.5 * (edges[k, 0] + edges[k + 1, 0])
+            lit = mid * side_lit + math.sqrt(1 - mid * mid) * front_lit
+            self.fill_pixels(corner_px[[k, n + k, n + k + 1, k + 1]],
+                             self.light.shade_lit(colour, lit))
 
     def sphere(self, centre, radius, colour):
         """A shaded sphere (a round fruit, a head)."""
@@ -152,6 +167,19 @@ class Painter:
         shift = towards * radius * 0.35
         self.fill_pixels(self._sphere_outline(centre + shift, radius * 0.7, 24),
                          self.light.shade(colour, view))
+
+    def ellipsoid(self, body):
+        """A shaded ellipsoid (``actors.Ellipsoid``): its outline, then a lit inner patch."""
+        points = body.surface_points()
+        if np.any(self.canvas.camera.to_camera(points)[:, 2] < NEAR):
+            return
+        view = self.eye - body.centre
+        view /= np.linalg.norm(view)
+        self.silhouette(points, None, self.light.shade(body.colour, view * 0.55))
+        towards = self.light.direction - view * np.dot(self.light.direction, view)
+        inner = body.centre + 0.3 * (towards * body.radii.min()) + \
+            (points - body.centre) * 0.62
+        self.silhouette(inner, None, self.light.shade(body.colour, 0.35 * view + 0.65 * self.light.direction))
 
     # -- textured planes -----------------------------------------------------------------
     def textured_plane(self, texture: np.ndarray, texture_to_world: np.ndarray,
@@ -181,6 +209,10 @@ class Painter:
         a = alpha.astype(np.float32)[..., None] * (shade / 255.0)
         region = self.image[y0:y1, x0:x1]
         region[:] = np.clip(region * (1.0 - alpha[..., None] / 255.0) + warped * a, 0, 255)
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 def clip_capsule(camera, p0, p1, r0, r1):

@@ -28,7 +28,8 @@ from tests.stereo_scenes.raster import NEAR, Light, Painter, clip_capsule
 from tests.stereo_scenes.static_scene import StaticTextures, draw_static
 
 MAX_SUBFRAMES = 8
-SUBFRAME_STEP_PX = 2.0      # motion between averaged instants, output pixels
+SUBFRAME_STEP_PX = 2.0
+SHADOW_SOFTNESS_M = 0.04    # room around shadows for their blur      # motion between averaged instants, output pixels
 
 
 @dataclass
@@ -96,7 +97,10 @@ class CameraView:
 
     # -- the window of moving things ------------------------------------------------------
     def _bounding_points(self, state: MovingState) -> np.ndarray:
-        pts = [state.vertices, self._on_table(state.vertices)]
+        """Points (n, 3) whose image bounds everything that moves, shadows included."""
+        palm = state.hand.palm.surface_points()
+        pts = [state.vertices, palm]
+        shadows = [self._on_table(state.vertices), self._on_table(palm)]
         limbs = state.hand.arm + state.hand.hand + [f for f, _, _ in state.hand.fingers]
         axes = self.camera.T_world_cam[:3, :2].T
         for group, shadow in ((limbs, True), (state.occluder, False)):
@@ -108,7 +112,10 @@ class CameraView:
                     ring = p + r * 1.3 * np.vstack([axes, -axes])
                     pts.append(ring)
                     if shadow:
-                        pts.append(self._on_table(ring))
+                        shadows.append(self._on_table(ring))
+        shadows = np.vstack(shadows)
+        soft = SHADOW_SOFTNESS_M * np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0]])
+        pts.append((shadows[:, None, :] + soft).reshape(-1, 3))
         return np.vstack(pts)
 
     def _on_table(self, points):
@@ -153,9 +160,10 @@ class CameraView:
     def _cast_shadow(self, painter: Painter, state: MovingState):
         """Darkens the painter's image where the sponge, hand and arm shade the table."""
         outline = self._on_table(state.vertices)
+        palm = self._on_table(state.hand.palm.surface_points())
         limbs = [(self._on_table(np.array([limb.p0, limb.p1])), limb)
                  for limb in state.hand.arm + state.hand.hand]
-        ends = np.vstack([outline] + [e for e, _ in limbs])
+        ends = np.vstack([outline, palm] + [e for e, _ in limbs])
         pixels = painter.to_pixels(ends)
         blur = max(1.0, 0.006 * self.canvas.focal())
         depth = float(self.canvas.project(state.centre)[1])
@@ -169,6 +177,7 @@ class CameraView:
                         painter.origin + [x0, y0], self.light)
         mask = np.zeros((y1 - y0, x1 - x0), np.uint8)
         local.silhouette(outline, mask)
+        local.silhouette(palm, mask)
         for (p0, p1), limb in limbs:
             local.capsule(p0, p1, limb.r0, limb.r1, 255, target=mask)
         mask = cv2.GaussianBlur(mask, (0, 0), blur)
@@ -184,7 +193,10 @@ class CameraView:
             painter.capsule(limb.p0, limb.p1, limb.r0, limb.r1, limb.colour)
         painter.solid(state.faces, self.sponge_colours)
         self._pores(painter, state)
-        for limb in state.hand.arm + state.hand.hand + shown + state.occluder:
+        for limb in state.hand.arm + state.hand.hand:
+            painter.capsule(limb.p0, limb.p1, limb.r0, limb.r1, limb.colour)
+        painter.ellipsoid(state.hand.palm)
+        for limb in shown + state.occluder:
             painter.capsule(limb.p0, limb.p1, limb.r0, limb.r1, limb.colour)
 
     def _pores(self, painter: Painter, state: MovingState):

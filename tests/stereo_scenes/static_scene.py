@@ -42,6 +42,9 @@ class StaticTextures:
                                                   min(px_per_m, 1200.0), hsv, item["folds"]))
             else:
                 self.cloths.append(None)
+        glossy = {"laminate": 0.8, "marble": 0.9, "tiles": 0.9, "wood": 0.5}
+        self.gloss = rng.uniform(0.1, 0.35) if rng.random() < glossy.get(table.texture, 0) else 0.0
+        self.gloss_radius = rng.uniform(0.08, 0.25)
         self.corner_jitter = [rng.uniform(-0.12, 0.12, (4, 2)) for _ in plan.distractors]
         self.stain_wobble = [rng.uniform(0.6, 1.3, 12) for _ in plan.distractors]
 
@@ -79,6 +82,8 @@ def draw_static(painter: Painter, plan, tex: StaticTextures):
     top_shade = light.gain * (light.ambient + light.diffuse * light.direction[2])
     painter.textured_plane(tex.table, plane_mapping(top[0], [1.0, 0, 0], [0, 1.0, 0],
                                                     1 / tex.px_per_m), top, shade=top_shade)
+    if tex.gloss > 0:
+        _draw_highlight(painter, top, tex.gloss, tex.gloss_radius)
     for item, cloth, jitter, wobble in zip(plan.distractors, tex.cloths, tex.corner_jitter,
                                            tex.stain_wobble):
         if item["kind"] == "cloth":
@@ -115,6 +120,30 @@ def _draw_person(painter, person, table_z):
     painter.sphere(head + [0.02, 0, 0.02], 0.1, person.hair_bgr)
     painter.sphere(head + [-0.015, 0, -0.01], 0.092, person.skin_bgr)
     painter.sphere(head + [0.01, 0, 0.045], 0.085, person.hair_bgr)
+
+
+def _draw_highlight(painter, top, strength: float, radius: float):
+    """The light's soft reflection on a glossy table top, where the mirrored light direction
+    meets the eye (brightens the table towards white)."""
+    L = painter.light.direction
+    mirrored = np.array([-L[0], -L[1], L[2]])
+    z = top[0, 2]
+    spot = painter.eye - mirrored * (painter.eye[2] - z) / mirrored[2]
+    if not (top[:, 0].min() - radius < spot[0] < top[:, 0].max() + radius and
+            top[:, 1].min() - radius < spot[1] < top[:, 1].max() + radius):
+        return
+    if painter.canvas.camera.to_camera(spot[None])[0, 2] < 0.1:
+        return
+    mask = np.zeros(painter.image.shape[:2], np.uint8)
+    painter.polygon(top, 255, target=mask)
+    glow = np.zeros(painter.image.shape[:2], np.uint8)
+    painter.polygon(horizontal_circle(spot, radius, 32), 255, target=glow)
+    uv, depth = painter.canvas.project(spot)
+    sigma = max(2.0, 0.6 * radius * painter.canvas.focal() / float(depth))
+    glow = cv2.GaussianBlur(glow, (0, 0), sigma)
+    alpha = (glow.astype(np.float32) * mask.astype(np.float32) * (strength / 255.0 / 255.0))
+    alpha = alpha[..., None]
+    painter.image[:] = np.clip(painter.image * (1 - alpha) + 250.0 * alpha, 0, 255)
 
 
 def _draw_cloth(painter, item, texture, jitter, z, shade):

@@ -43,13 +43,18 @@ class VideoFile:
         else:
             stream.bit_rate = int(video.bits_per_pixel * width * height * video.fps)
             stream.codec_context.flags |= av.codec.context.Flags.bitexact
+        stream.time_base = Fraction(1, video.fps)
         self._stream = stream
+        self._count = 0
 
     def write(self, frame: np.ndarray):
         if self.video.writer == "opencv":
             self._cv.write(frame)
             return
         packet_frame = av.VideoFrame.from_ndarray(frame, format="bgr24")
+        packet_frame.pts = self._count
+        packet_frame.time_base = Fraction(1, self.video.fps)
+        self._count += 1
         for packet in self._stream.encode(packet_frame):
             self._container.mux(packet)
 
