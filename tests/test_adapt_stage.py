@@ -56,15 +56,16 @@ def test_adapt_logs_read_back(adapted):
         summary = reader.get_summary()
         topics = {c.topic for c in summary.channels.values()}
         schemas = {s.name for s in summary.schemas.values()}
-    assert {"/tf", "/robot/joint_states/position", "/adapt/wrench", "/adapt/height",
-            "/adapt/force_norm", "/adapt/contact", "/adapt/tcp_commanded", "/adapt/tcp_actual",
-            "/adapt/force_arrow", "/adapt/learned_profile", "/adapt/segment"} <= topics
+    assert {"/tf", "/robot/joint_states/position", "/adapt/wrench", "/adapt/tcp_height",
+            "/adapt/contact_height", "/adapt/force_norm", "/adapt/contact", "/adapt/tcp_commanded",
+            "/adapt/tcp_actual", "/adapt/force_arrow", "/adapt/learned_profile", "/adapt/profile",
+            "/adapt/segment", "/adapt/events", "/robot/body", "/robot/sponge"} <= topics
     assert {"foxglove.FrameTransforms", "foxglove.PoseInFrame"} <= schemas
     from rerun.chunk import RrdReader
 
     entities = {chunk.to_record_batch().schema.metadata[b"rerun:entity_path"].decode()
                 for chunk in RrdReader(out / "adapt.rrd").stream()}
-    assert {"/adapt/height", "/adapt/force_norm", "/robot/sponge", "/tf_static"} <= entities
+    assert {"/adapt/tcp_height", "/adapt/force_norm", "/robot/sponge", "/tf_static"} <= entities
     assert any(e.startswith("/armar3b/") for e in entities)      # the robot from the URDF
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["stage"] == "adapt" and "model" in manifest["inputs"]

@@ -19,8 +19,9 @@ def test_report_draws_the_figures_of_every_stage_and_summarises_the_metrics(robo
     result = CliRunner().invoke(report, [str(run_dir), "-o", str(tmp_path / "report")])
     assert result.exit_code == 0, result.output
     written = sorted(p.name for p in (tmp_path / "report").iterdir())
-    assert written == ["adapt_height_force.png", "learn_frequency.png", "learn_waveform.png",
-                       "replay_force_error.png", "replay_height_force.png", "summary.md"]
+    assert written == ["adapt_height_force.png", "adapt_profile.png", "learn_frequency.png",
+                       "learn_waveform.png", "replay_force_error.png",
+                       "replay_force_over_phase.png", "replay_height_force.png", "summary.md"]
     for name in written[:-1]:
         image = matplotlib.image.imread(tmp_path / "report" / name)
         assert image.shape[0] > 300 and image.shape[1] > 600, name

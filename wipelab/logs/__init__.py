@@ -44,11 +44,12 @@ from wipelab.logs.reader import (mcap_attachments, mcap_input_hashes, mcap_metad
                                  mcap_parameters, mcap_topics, point_cloud_points,
                                  read_mcap_scalars, read_mcap_topic, read_rrd_scalars,
                                  rrd_blueprint_views, rrd_column, rrd_record_batches)
-from wipelab.logs.recorder import (APPLICATION_ID, TF_TOPIC, TIMELINE, WORLD_FRAME, StageRecorder,
-                                   default_blueprint)
+from wipelab.logs.recorder import (TF_TOPIC, TIMELINE, WORLD_FRAME, StageRecorder, application_id,
+                                   default_blueprint, stage_panels)
 
 __all__ = [
-    "APPLICATION_ID", "TF_TOPIC", "TIMELINE", "WORLD_FRAME", "StageRecorder", "default_blueprint",
+    "TF_TOPIC", "TIMELINE", "WORLD_FRAME", "StageRecorder", "application_id", "default_blueprint",
+    "stage_panels",
     "mcap_attachments", "mcap_input_hashes", "mcap_metadata", "mcap_parameters", "mcap_topics",
     "point_cloud_points", "read_mcap_scalars", "read_mcap_topic", "read_rrd_scalars",
     "rrd_blueprint_views", "rrd_column", "rrd_record_batches",

@@ -31,15 +31,18 @@ import rerun.blueprint as rrb
 from tqdm import tqdm
 
 from wipelab.errors import InputError
-from wipelab.logs import StageRecorder
+from wipelab.logs import TIMELINE, StageRecorder, stage_panels
+from wipelab.logs.timebase import seconds_array_to_ns
+from wipelab.logs.palette import XYZ_COLOURS
 from wipelab.manifest import build_manifest, write_json
 from wipelab.stage_output import staged_output
 from wipelab.trajectory_csv import write_trajectory
 from wipelab.vision.calibration import StereoCalibration, load_calibration
 from wipelab.vision.colour_model import NAMED_COLOURS, ColourSource, parse_hsv_range
 from wipelab.vision.demonstration_area import DemonstrationArea, measure_demonstration_area
+from wipelab.sim.kinematics import rotation_about_axis
 from wipelab.vision.projection import invert_transform
-from wipelab.vision.sponge_box import SpongeBox
+from wipelab.vision.sponge_box import EDGES, SpongeBox, yaw_rotation
 from wipelab.vision.tracker import SpongeTracker, TrackerParams
 from wipelab.vision.video_io import H264Writer, StereoVideoReader
 
@@ -222,11 +225,15 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
                                    "sponge": asdict(tracker_params.sponge)}
     inputs = {"left_video": demo.left, "right_video": demo.right,
               "calibration": demo.calibration_path}
+    scene = TrackScene(demo.calibration, "world" if result.frame == "world" else LEFT_FRAME,
+                       np.eye(3) if tracker.R_track_table is None else tracker.R_track_table,
+                       tracker_params.sponge)
+    blueprint = track_blueprint(scene, result.area, float(np.nanmean(result.poses[result.valid, 2])))
     with staged_output(out_dir) as tmp:
         write_trajectory(tmp / "track.csv", result.t, _csv_columns(result))
-        with StageRecorder(tmp, "track", parameters, inputs, track_blueprint(),
+        with StageRecorder(tmp, "track", parameters, inputs, blueprint,
                            attachments={"calibration.yaml": demo.calibration_path}) as rec:
-            log_track(rec, demo, result, quiet)
+            log_track(rec, demo, result, scene, quiet)
         write_json(tmp / "manifest.json", build_manifest("track", inputs, parameters,
                                                          params.seed))
     return result
@@ -266,17 +273,102 @@ def _csv_columns(result: TrackResult) -> dict[str, np.ndarray]:
             "yaw": p[:, 3], "x_norm": result.normalised[:, 0], "y_norm": result.normalised[:, 1]}
 
 
-def track_blueprint() -> rrb.Blueprint:
-    """Both images with particles and estimate, the 3D scene, and x, y, z over time."""
+#: Colours of the logs: sponge box, particles, trajectory, demonstration area.
+SPONGE_COLOUR, PARTICLE_COLOUR = (255, 70, 50), (80, 220, 80)
+TRAJECTORY_COLOUR, AREA_COLOUR = (255, 200, 0), (90, 160, 255)
+#: Length (m) of the camera frustums drawn in the 3D view.
+FRUSTUM_LENGTH = 0.1
+#: Tracking states per frame (``/track/quality``) and their colours.
+QUALITY_COLOURS = {"tracked": (40, 175, 120), "box": (40, 175, 120),
+                   "centroid": (240, 150, 40), "lost": (200, 60, 60)}
+
+
+@dataclass(frozen=True)
+class TrackScene:
+    """What logging a frame needs: the cameras, the frame tracks are reported in, how the
+    table lies in it, and the sponge box.
+
+    Attributes
+    ----------
+    calibration : StereoCalibration
+    frame : str
+        Frame id of the track frame in the logs: ``world`` or the left camera's optical frame.
+    R_track_table : ndarray, shape (3, 3)
+        Table axes in the track frame (the sponge's yaw turns about the table normal).
+    sponge : SpongeBox
+    """
+
+    calibration: StereoCalibration
+    frame: str
+    R_track_table: np.ndarray
+    sponge: SpongeBox
+
+    @property
+    def T_left_track(self) -> np.ndarray:
+        return invert_transform(self.calibration.T_track_left)
+
+    def camera_centres(self) -> np.ndarray:
+        """Left and right camera centres (2, 3) in the track frame."""
+        T_track_right = self.calibration.T_track_left @ invert_transform(
+            self.calibration.right.T_cam_ref)
+        return np.stack([self.calibration.T_track_left[:3, 3], T_track_right[:3, 3]])
+
+    def sponge_rotation(self, yaw: float) -> np.ndarray:
+        """Sponge axes (3, 3) in the track frame at ``yaw`` (rad)."""
+        return self.R_track_table @ yaw_rotation(np.asarray(yaw))
+
+    def box_edges_px(self, pose: np.ndarray) -> list[np.ndarray]:
+        """The 12 edges of the sponge box at ``pose`` (x, y, z, yaw) projected into the left
+        and right images: two arrays (12, 2, 2) of pixels (top-left pixel corner = 0)."""
+        corners = pose[:3] + self.sponge.corners() @ self.sponge_rotation(pose[3]).T
+        return [self._pixels(camera, corners)[EDGES] for camera in self.cameras()]
+
+    def particles_px(self, particles: np.ndarray) -> list[np.ndarray]:
+        """Particle centres (m, 3) in the track frame -> pixels (m, 2) in each image."""
+        return [self._pixels(camera, particles[:, :3]) for camera in self.cameras()]
+
+    def cameras(self):
+        return self.calibration.left, self.calibration.right
+
+    def _pixels(self, camera, points_track: np.ndarray) -> np.ndarray:
+        T = self.T_left_track
+        return camera.project(points_track @ T[:3, :3].T + T[:3, 3]) + 0.5
+
+
+def track_blueprint(scene: TrackScene, area: DemonstrationArea, height: float) -> rrb.Blueprint:
+    """Both images with the projected sponge box and particles; the 3D view framed on the
+    demonstration area, with both camera frustums and the trajectory growing over time;
+    x, y, z each on its own axes; whether the sponge was tracked."""
+    centre = np.array([*area.centre, height])
+    cameras = scene.camera_centres().mean(axis=0)
+    up = scene.R_track_table[:, 2]
+    # from the cameras' side, turned 40 degrees about the table normal: the cameras at the
+    # edge of the view, the demonstration in the middle
+    side = rotation_about_axis(up, np.radians(40.0)) @ (cameras - centre)
+    eye = rrb.EyeControls3D(position=centre + 1.8 * side, look_target=centre + 0.25 * (cameras - centre),
+                            eye_up=up)
+    growing = rrb.VisibleTimeRanges(timeline="time", start=rrb.TimeRangeBoundary.infinite(),
+                                    end=rrb.TimeRangeBoundary.cursor_relative())
+    axes = [rrb.TimeSeriesView(
+        origin="/track/position", name=f"sponge {axis} (m)", plot_legend=rrb.PlotLegend(visible=False),
+        overrides={"/track/position": rr.SeriesLines.from_fields(
+            visible_series=[a == axis for a in "xyz"])}) for axis in "xyz"]
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Vertical(rrb.Spatial2DView(origin="/stereo/left", name="left camera"),
                          rrb.Spatial2DView(origin="/stereo/right", name="right camera")),
-            rrb.Vertical(rrb.Spatial3DView(origin="/", name="scene"),
-                         rrb.TimeSeriesView(origin="/track/position", name="sponge x, y, z (m)"),
-                         row_shares=[3, 2]),
+            rrb.Vertical(rrb.Spatial3DView(origin="/", name="sponge, cameras and demonstration area",
+                                           contents=["+ /**", "- /tf/**",
+                                                     *(f"- /stereo/{side}/{what}"
+                                                       for side in ("left", "right")
+                                                       for what in ("video", "overlay"))],
+                                           eye_controls=eye,
+                                           overrides={"/track/trajectory": growing}),
+                         *axes,
+                         rrb.StateTimelineView(origin="/track/quality", name="sponge tracked?"),
+                         row_shares=[4, 1, 1, 1, 0.8]),
             column_shares=[1, 1]),
-        collapse_panels=True)
+        *stage_panels())
 
 
 def _quaternion_xyzw(R: np.ndarray) -> np.ndarray:
@@ -312,22 +404,63 @@ def _video_for_logs(path: Path, fps: float, size: tuple[int, int], workdir: Path
     return copy
 
 
-def log_track(rec: StageRecorder, demo: Demo, result: TrackResult, quiet: bool = True) -> None:
-    """Write the run into the MCAP and Rerun recordings of ``rec``."""
-    calibration = demo.calibration
+def log_track_setup(rec: StageRecorder, scene: TrackScene) -> None:
+    """What does not change from frame to frame: /tf of the cameras and their calibrations
+    (the 3D view draws their frustums)."""
+    calibration = scene.calibration
     width, height = calibration.image_size
-    frame = "world" if result.frame == "world" else LEFT_FRAME
     T_track_left = calibration.T_track_left
     T_track_right = T_track_left @ invert_transform(calibration.right.T_cam_ref)
-    tf = [(frame, RIGHT_FRAME, T_track_right[:3, 3], _quaternion_xyzw(T_track_right[:3, :3]))]
-    if frame == "world":
+    tf = [(scene.frame, RIGHT_FRAME, T_track_right[:3, 3], _quaternion_xyzw(T_track_right[:3, :3]))]
+    if scene.frame == "world":
         tf.insert(0, ("world", LEFT_FRAME, T_track_left[:3, 3],
                       _quaternion_xyzw(T_track_left[:3, :3])))
     rec.transforms(0.0, tf)
-    rec.camera_calibration("/stereo/left/calibration", 0.0, calibration.K1,
-                           _five(calibration.D1), width, height, LEFT_FRAME)
-    rec.camera_calibration("/stereo/right/calibration", 0.0, calibration.K2,
-                           _five(calibration.D2), width, height, RIGHT_FRAME)
+    for side, K, D, frame_id in (("left", calibration.K1, calibration.D1, LEFT_FRAME),
+                                 ("right", calibration.K2, calibration.D2, RIGHT_FRAME)):
+        rec.camera_calibration(f"/stereo/{side}/calibration", 0.0, K, _five(D), width, height,
+                               frame_id, image_plane_distance=FRUSTUM_LENGTH)
+
+
+def log_track_frame(rec: StageRecorder, scene: TrackScene, index: int, t: float,
+                    pose: np.ndarray, valid: bool, particles: np.ndarray,
+                    previous: np.ndarray | None) -> None:
+    """One frame: the sponge box (removed while lost), the particles, the new piece of the
+    trajectory (from ``previous``, the last frame's position if it was tracked) and the box
+    and particles drawn over both images.
+
+    ``pose`` (4,) x, y, z (m) and yaw (rad) in the track frame; ``particles`` (m, >= 3) their
+    positions first (NaN rows are skipped).
+    """
+    particles = particles[np.isfinite(particles[:, 0])]
+    if len(particles):
+        rec.points3d("/track/particles", t, particles[:, :3], colors=PARTICLE_COLOUR,
+                     radii=0.0015, frame_id=scene.frame)
+    size = [scene.sponge.length, scene.sponge.width, scene.sponge.height]
+    if valid:
+        rotation = scene.sponge_rotation(pose[3])
+        rec.box3d("/track/sponge", t, size, pose[:3], _quaternion_xyzw(rotation),
+                  color=SPONGE_COLOUR, frame_id=scene.frame)
+        if previous is not None:
+            rec.line_strip3d("/track/trajectory", t, np.stack([previous, pose[:3]]),
+                             color=TRAJECTORY_COLOUR, frame_id=scene.frame,
+                             entity_id=f"/track/trajectory/{index}")
+    else:
+        rec.box3d("/track/sponge", t, size, None, frame_id=scene.frame)
+    edges = scene.box_edges_px(pose) if valid else [np.zeros((0, 2, 2))] * 2
+    dots = scene.particles_px(particles) if len(particles) else [np.zeros((0, 2))] * 2
+    for side, frame_id, lines, points in zip(("left", "right"), (LEFT_FRAME, RIGHT_FRAME),
+                                             edges, dots):
+        rec.image_overlay(f"/stereo/{side}/overlay", t, frame_id, lines,
+                          points[np.isfinite(points).all(axis=1)], SPONGE_COLOUR, PARTICLE_COLOUR)
+
+
+def log_track(rec: StageRecorder, demo: Demo, result: TrackResult, scene: TrackScene,
+              quiet: bool = True) -> None:
+    """Write the run into the MCAP and Rerun recordings of ``rec``."""
+    calibration = demo.calibration
+    width, height = calibration.image_size
+    log_track_setup(rec, scene)
     with tempfile.TemporaryDirectory(prefix="wipelab-track-") as workdir:
         for side, path, frame_id in (("left", demo.left, LEFT_FRAME),
                                      ("right", demo.right, RIGHT_FRAME)):
@@ -335,50 +468,40 @@ def log_track(rec: StageRecorder, demo: Demo, result: TrackResult, quiet: bool =
             rec.video(f"/stereo/{side}/video", video, result.t, frame_id=frame_id)
 
     t, valid = result.t, result.valid
-    rec.scalars("/track/position", t[valid], result.poses[valid, :3], names=["x", "y", "z"])
+    rec.scalars("/track/position", t[valid], result.poses[valid, :3], names=["x", "y", "z"],
+                colors=np.array([XYZ_COLOURS[a] for a in "xyz"]))
+    # Rerun only (the MCAP keeps the tracked frames, what learn reads): a NaN row where the
+    # sponge is lost, so that the plots break there instead of bridging the gap
+    lost = np.flatnonzero(~valid & np.concatenate([[True], valid[:-1]]))
+    if lost.size:
+        rec.rerun.send_columns("/track/position", indexes=[rr.TimeColumn(
+            TIMELINE, duration=seconds_array_to_ns(t[lost]).astype("timedelta64[ns]"))],
+            columns=rr.Scalars.columns(scalars=np.full((lost.size, 3), np.nan)))
     rec.scalars("/track/valid", t, valid.astype(float))
+    quality = np.where(valid, "tracked", "lost")
+    changes = np.flatnonzero(np.concatenate([[True], quality[1:] != quality[:-1]]))
+    rec.states("/track/quality", t[changes], quality[changes].tolist(),
+               {q: QUALITY_COLOURS[q] for q in dict.fromkeys(quality.tolist())})
     rec.scalars("/track/normalised", t[valid], result.normalised[valid], names=["x_norm", "y_norm"])
     rec.scalars("/track/contrast", t, result.contrast, names=["left", "right"])
     rec.scalars("/track/coverage", t, result.coverage, names=["left", "right"])
     area = result.area
     rec.json("/track/demonstration_area", 0.0,
              {"lower_left": area.lower_left, "upper_right": area.upper_right,
-              "centre": area.centre, "window_s": list(area.window), "frame": frame},
+              "centre": area.centre, "window_s": list(area.window), "frame": scene.frame},
              "wipelab.DemonstrationArea")
     height_mean = float(np.nanmean(result.poses[valid, 2]))
     (x0, y0), (x1, y1) = area.lower_left, area.upper_right
     rectangle = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1], [x0, y0]])
     rec.line_strip3d("/track/demonstration_area/outline", 0.0,
-                     np.column_stack([rectangle, np.full(5, height_mean)]), color=(90, 160, 255),
-                     frame_id=frame)
-    rec.line_strip3d("/track/trajectory", float(t[-1]), result.poses[valid, :3],
-                     color=(255, 200, 0), frame_id=frame)
-
-    views = ((calibration.left, "left", LEFT_FRAME), (calibration.right, "right", RIGHT_FRAME))
-    T_left_track = invert_transform(T_track_left)
+                     np.column_stack([rectangle, np.full(5, height_mean)]), color=AREA_COLOUR,
+                     frame_id=scene.frame)
+    previous = None
     for k in tqdm(range(len(t)), desc="logs", unit="frame", disable=quiet, file=sys.stderr,
                   leave=False):
-        particles = result.particles[k]
-        particles = particles[np.isfinite(particles[:, 0])]
-        if len(particles):
-            rec.points3d("/track/particles", float(t[k]), particles[:, :3],
-                         colors=(80, 220, 80), radii=0.0015, frame_id=frame)
-        if valid[k]:
-            rec.points3d("/track/sponge", float(t[k]), result.poses[k, :3][None],
-                         colors=(255, 60, 60), radii=0.006, frame_id=frame)
-        for camera, side, frame_id in views:
-            entity = f"/stereo/{side}/overlay"
-            points_left = (particles[:, :3] @ T_left_track[:3, :3].T + T_left_track[:3, 3])
-            rec.rerun.log(f"{entity}/particles", rr.Points2D(camera.project(points_left),
-                                                             colors=(80, 220, 80), radii=1.0))
-            estimate = result.poses[k, :3] @ T_left_track[:3, :3].T + T_left_track[:3, 3]
-            rec.rerun.log(f"{entity}/sponge", rr.Points2D(
-                camera.project(estimate[None]) if valid[k] else np.zeros((0, 2)),
-                colors=(255, 60, 60), radii=4.0))
-    for _, side, frame_id in views:
-        for name in ("particles", "sponge"):
-            rec.rerun.log(f"/stereo/{side}/overlay/{name}",
-                          rr.CoordinateFrame(frame_id + "_image_plane"), static=True)
+        log_track_frame(rec, scene, k, float(t[k]), result.poses[k], bool(valid[k]),
+                        result.particles[k], previous)
+        previous = result.poses[k, :3] if valid[k] else None
 
 
 def _five(D: np.ndarray) -> np.ndarray:
