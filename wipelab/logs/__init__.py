@@ -45,11 +45,11 @@ from wipelab.logs.reader import (mcap_attachments, mcap_input_hashes, mcap_metad
                                  read_mcap_scalars, read_mcap_topic, read_rrd_scalars,
                                  rrd_blueprint_views, rrd_column, rrd_record_batches)
 from wipelab.logs.recorder import (TF_TOPIC, TIMELINE, WORLD_FRAME, StageRecorder, application_id,
-                                   default_blueprint, stage_panels)
+                                   default_blueprint, stage_panels, whole_run)
 
 __all__ = [
     "TF_TOPIC", "TIMELINE", "WORLD_FRAME", "StageRecorder", "application_id", "default_blueprint",
-    "stage_panels",
+    "stage_panels", "whole_run",
     "mcap_attachments", "mcap_input_hashes", "mcap_metadata", "mcap_parameters", "mcap_topics",
     "point_cloud_points", "read_mcap_scalars", "read_mcap_topic", "read_rrd_scalars",
     "rrd_blueprint_views", "rrd_column", "rrd_record_batches",

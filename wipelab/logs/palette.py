@@ -14,13 +14,13 @@ XYZ_COLOURS = {"x": (230, 75, 60), "y": (70, 180, 70), "z": (70, 130, 230)}
 INPUT_COLOUR, LEARNED_COLOUR = (70, 150, 230), (235, 90, 60)
 #: The oscillators' frequencies (learn; the chosen fundamental is drawn as a reference).
 OSCILLATOR_COLOURS = ((70, 150, 230), (240, 150, 40), (200, 70, 160))
-#: A reference value (F0, a true value).
-REFERENCE_COLOUR = (200, 200, 200)
+#: A reference value (F0, a true value): mid grey, seen on the viewer's dark and light themes.
+REFERENCE_COLOUR = (150, 150, 150)
 #: Replay modes.
 MODE_COLOURS = {"learned": (60, 130, 230), "learned+compliance": (40, 175, 120),
                 "compliance": (240, 150, 40), "planar": (200, 70, 160)}
-#: Replay speeds in increasing order (yellow = slowest, then red, purple, blue, ...).
-SPEED_RAMP = ((250, 210, 70), (230, 80, 60), (150, 60, 190), (60, 120, 230), (40, 190, 200),
+#: Replay speeds in increasing order (amber = slowest, then red, purple, blue, ...).
+SPEED_RAMP = ((235, 170, 20), (230, 80, 60), (150, 60, 190), (60, 120, 230), (40, 190, 200),
               (120, 200, 90))
 #: The parts of an adapt or replay run that are not a wiping run.
 PHASE_COLOURS = {"approach": (120, 120, 120), "F/T calibration": (230, 190, 60),

@@ -16,11 +16,13 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
+from wipelab.logs.palette import REFERENCE_COLOUR
+
 #: Phase ticks (rad) and their labels.
 PHASE_TICKS = ((0.0, "0"), (0.5 * math.pi, "π/2"), (math.pi, "π"), (1.5 * math.pi, "3π/2"),
                (2.0 * math.pi, "2π"))
-AXIS_COLOUR, GRID_COLOUR, LABEL_COLOUR = (170, 170, 170), (70, 70, 70), (200, 200, 200)
-REFERENCE_COLOUR = (235, 235, 235)
+#: Mid greys (the grid half transparent): readable on the viewer's dark and light themes.
+AXIS_COLOUR, GRID_COLOUR, LABEL_COLOUR = (140, 140, 140), (128, 128, 128, 70), (140, 140, 140)
 #: How far (fraction of the chart height) a label's anchor sits above the text it centres.
 LABEL_LIFT = 0.06
 

@@ -77,6 +77,13 @@ def stage_panels() -> list:
             rrb.TimePanel(state="collapsed")]
 
 
+def whole_run() -> rrb.TimeAxis:
+    """A time axis over the whole recording, for time series and state timelines (not a
+    window around the time cursor)."""
+    return rrb.TimeAxis(view_range=rrb.TimeRange(start=rrb.TimeRangeBoundary.infinite(),
+                                                 end=rrb.TimeRangeBoundary.infinite()))
+
+
 def default_blueprint() -> rrb.Blueprint:
     """Layout for a stage that brings none: the 3D scene beside all time series."""
     return rrb.Blueprint(rrb.Horizontal(rrb.Spatial3DView(origin="/", name="scene"),
@@ -144,6 +151,7 @@ class StageRecorder:
             self._mcap_file.close()
             self.mcap_path.unlink()
             raise
+        self.rerun.send_recording_name(stage)  # what the viewer lists it as
         self._mcap = McapLog(self._mcap_file)
         self._mcap.metadata(METADATA_STAGE, {"stage": stage, "recording_id": self.recording_id})
         self._mcap.metadata(METADATA_PARAMETERS,

@@ -51,7 +51,7 @@ from rerun.urdf import UrdfTree
 
 from wipelab.control.force_profile import COMPARISON_PHASES
 from wipelab.learning import PeriodicModel
-from wipelab.logs import StageRecorder, stage_panels
+from wipelab.logs import StageRecorder, stage_panels, whole_run
 from wipelab.logs.palette import (INPUT_COLOUR, LEARNED_COLOUR, REFERENCE_COLOUR, segment_colour,
                                   speed_colours)
 from wipelab.logs.phase_chart import PhaseChart
@@ -85,7 +85,7 @@ FORCE_COLOURS = (INPUT_COLOUR, REFERENCE_COLOUR, (150, 110, 200))
 #: Roots of the entities drawn as 2D charts (kept out of the 3D view).
 CHARTS = ("/adapt/profile", "/replay/force_by_phase")
 #: Colours of the learned profile period after period (light to dark) in ``/adapt/profile``.
-PERIOD_RAMP = ((170, 210, 250), (60, 120, 230))
+PERIOD_RAMP = ((250, 195, 175), LEARNED_COLOUR)
 
 
 @dataclass(frozen=True)
@@ -138,16 +138,24 @@ def _scene_view(trace: dict) -> rrb.Spatial3DView:
         eye_up=[0.0, 0.0, 1.0]))
 
 
+def _series_view(origin: str, name: str, **options) -> rrb.TimeSeriesView:
+    """Series over the whole run, the legend in the top right corner."""
+    return rrb.TimeSeriesView(origin=origin, name=name, axis_x=whole_run(),
+                              plot_legend=rrb.PlotLegend("RightTop"), **options)
+
+
+def _state_view(origin: str, name: str) -> rrb.StateTimelineView:
+    return rrb.StateTimelineView(origin=origin, name=name, time_view=whole_run())
+
+
 def _height_views(stage: str) -> list[rrb.TimeSeriesView]:
     """The TCP's height (what the controller commands) and the contact point's (where the
     sponge touches) with the surface under it."""
-    return [rrb.TimeSeriesView(
-                origin=f"/{stage}/tcp_height", name="TCP (tool centre point) z (m)",
-                overrides={f"/{stage}/tcp_height": rr.SeriesLines.from_fields(
-                    visible_series=TCP_SHOWN)}, plot_legend=rrb.PlotLegend("RightTop")),
-            rrb.TimeSeriesView(origin=f"/{stage}/contact_height",
-                               name="contact point (sponge bottom) and surface z (m)",
-                               plot_legend=rrb.PlotLegend("RightTop"))]
+    tcp = f"/{stage}/tcp_height"
+    return [_series_view(tcp, "TCP (tool centre point) z (m)", overrides={
+                tcp: rr.SeriesLines.from_fields(visible_series=TCP_SHOWN)}),
+            _series_view(f"/{stage}/contact_height",
+                         "contact point (sponge bottom) and surface z (m)")]
 
 
 def adapt_blueprint(trace: dict) -> rrb.Blueprint:
@@ -162,10 +170,9 @@ def adapt_blueprint(trace: dict) -> rrb.Blueprint:
                                                            "over the phase (rad), per period"),
                              row_shares=[3, 2]),
                 rrb.Vertical(*_height_views("adapt"),
-                             rrb.TimeSeriesView(origin="/adapt/force_norm", name="|F| and F0 (N)",
-                                                plot_legend=rrb.PlotLegend("RightTop"))),
+                             _series_view("/adapt/force_norm", "|F| and F0 (N)")),
                 column_shares=[1, 1]),
-            rrb.StateTimelineView(origin="/adapt/segment", name="what the robot does"),
+            _state_view("/adapt/segment", "what the robot does"),
             row_shares=[7, 1]),
         *stage_panels())
 
@@ -179,11 +186,10 @@ def replay_blueprint(trace: dict, modes) -> rrb.Blueprint:
         rrb.Vertical(
             rrb.Horizontal(
                 rrb.Vertical(_scene_view(trace),
-                             rrb.TimeSeriesView(origin="/replay/force_norm", name="|F| and F0 (N)",
-                                                plot_legend=rrb.PlotLegend("RightTop"))),
+                             _series_view("/replay/force_norm", "|F| and F0 (N)")),
                 rrb.Grid(*charts, grid_columns=2 if len(charts) > 1 else 1),
                 column_shares=[2, 3]),
-            rrb.StateTimelineView(origin="/replay/segment", name="run: speed (frequency) and mode"),
+            _state_view("/replay/segment", "run: speed (frequency) and mode"),
             row_shares=[7, 1]),
         *stage_panels())
 

@@ -40,7 +40,7 @@ from wipelab.errors import InputError
 from wipelab.learning import (CANONICAL_SYSTEMS, MODEL_FORMAT, LearnHistory, OfflineParameters,
                               OnlineParameters, PeriodicModel, harmonic_fit, learn_offline,
                               learn_online, periodicity, to_uniform)
-from wipelab.logs import StageRecorder, stage_panels
+from wipelab.logs import StageRecorder, stage_panels, whole_run
 from wipelab.logs.palette import (INPUT_COLOUR, LEARNED_COLOUR, OSCILLATOR_COLOURS,
                                   REFERENCE_COLOUR)
 from wipelab.logs.phase_chart import PhaseChart
@@ -98,9 +98,10 @@ def learn_blueprint(dofs) -> rrb.Blueprint:
     return rrb.Blueprint(
         rrb.Vertical(
             rrb.TimeSeriesView(origin="/oscillators", name="frequency adaptation (Hz)",
-                               plot_legend=rrb.PlotLegend("RightTop")),
+                               axis_x=whole_run(), plot_legend=rrb.PlotLegend("RightTop")),
             rrb.Horizontal(*[rrb.TimeSeriesView(origin=f"/dmp/{dof}/waveform",
                                                 name=f"{dof}: input (demonstrated) vs learned (m)",
+                                                axis_x=whole_run(),
                                                 plot_legend=rrb.PlotLegend("RightTop"))
                              for dof in dofs]),
             rrb.Horizontal(*[rrb.Spatial2DView(origin=f"/dmp/{dof}/period",

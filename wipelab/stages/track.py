@@ -31,7 +31,7 @@ import rerun.blueprint as rrb
 from tqdm import tqdm
 
 from wipelab.errors import InputError
-from wipelab.logs import TIMELINE, StageRecorder, stage_panels
+from wipelab.logs import TIMELINE, StageRecorder, stage_panels, whole_run
 from wipelab.logs.timebase import seconds_array_to_ns
 from wipelab.logs.palette import XYZ_COLOURS
 from wipelab.manifest import build_manifest, write_json
@@ -350,7 +350,8 @@ def track_blueprint(scene: TrackScene, area: DemonstrationArea, height: float) -
     growing = rrb.VisibleTimeRanges(timeline="time", start=rrb.TimeRangeBoundary.infinite(),
                                     end=rrb.TimeRangeBoundary.cursor_relative())
     axes = [rrb.TimeSeriesView(
-        origin="/track/position", name=f"sponge {axis} (m)", plot_legend=rrb.PlotLegend(visible=False),
+        origin="/track/position", name=f"sponge {axis} (m)", axis_x=whole_run(),
+        plot_legend=rrb.PlotLegend(visible=False),
         overrides={"/track/position": rr.SeriesLines.from_fields(
             visible_series=[a == axis for a in "xyz"])}) for axis in "xyz"]
     return rrb.Blueprint(
@@ -365,7 +366,8 @@ def track_blueprint(scene: TrackScene, area: DemonstrationArea, height: float) -
                                            eye_controls=eye,
                                            overrides={"/track/trajectory": growing}),
                          *axes,
-                         rrb.StateTimelineView(origin="/track/quality", name="sponge tracked?"),
+                         rrb.StateTimelineView(origin="/track/quality", name="sponge tracked?",
+                                               time_view=whole_run()),
                          row_shares=[4, 1, 1, 1, 0.8]),
             column_shares=[1, 1]),
         *stage_panels())
