@@ -28,13 +28,16 @@ LABEL_LIFT = 0.06
 
 
 def nice_ticks(low: float, high: float, count: int = 5) -> np.ndarray:
-    """About ``count`` round tick values (1, 2 or 5 times a power of ten apart) covering
-    [low, high]."""
+    """Round tick values covering [low, high], 1, 2, 5 or 10 times a power of ten apart:
+    the spacing whose number of ticks is closest to ``count`` (the fewer on a tie)."""
     span = max(high - low, 1e-12)
-    raw = span / max(count - 1, 1)
-    power = 10.0 ** math.floor(math.log10(raw))
-    step = next(m * power for m in (1.0, 2.0, 5.0, 10.0) if m * power >= raw)
-    return np.arange(math.floor(low / step), math.ceil(high / step) + 1) * step
+    power = 10.0 ** math.floor(math.log10(span / max(count - 1, 1)))
+
+    def ticks(step: float) -> np.ndarray:
+        return np.arange(math.floor(low / step + 1e-9), math.ceil(high / step - 1e-9) + 1) * step
+
+    options = [ticks(m * power) for m in (1.0, 2.0, 5.0, 10.0)]
+    return min(options, key=lambda values: (abs(len(values) - count), len(values)))
 
 
 @dataclass(frozen=True)
