@@ -345,7 +345,7 @@ def track_blueprint(scene: TrackScene, area: DemonstrationArea, height: float) -
     # from the cameras' side, turned 40 degrees about the table normal: the cameras at the
     # edge of the view, the demonstration in the middle
     side = rotation_about_axis(up, np.radians(40.0)) @ (cameras - centre)
-    eye = rrb.EyeControls3D(position=centre + 1.8 * side, look_target=centre + 0.25 * (cameras - centre),
+    eye = rrb.EyeControls3D(position=centre + 1.5 * side, look_target=centre + 0.3 * (cameras - centre),
                             eye_up=up)
     growing = rrb.VisibleTimeRanges(timeline="time", start=rrb.TimeRangeBoundary.infinite(),
                                     end=rrb.TimeRangeBoundary.cursor_relative())
