@@ -6,14 +6,15 @@ kept. Time in seconds since the start of the recording, strictly increasing; pos
 metres in the world frame (left-camera frame when the calibration has no ``T_world_left``).
 
 Rows with ``valid = 0`` (e.g. frames where the tracker lost the sponge) may hold NaN in the
-position columns; every other value must be finite.
+position columns; every other value must be finite. The one text column is track's
+``quality`` (:data:`TEXT_COLUMNS`): how each row was measured.
 """
 
 from __future__ import annotations
 
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +24,8 @@ from wipelab.input_files import read_input_text
 
 #: Name of the optional 0/1 column that flags usable rows.
 VALID_COLUMN = "valid"
+#: Columns that hold text rather than numbers (kept as str arrays).
+TEXT_COLUMNS = ("quality",)
 
 
 @dataclass(frozen=True)
@@ -36,12 +39,15 @@ class Trajectory:
     t : ndarray, shape (n,)
         Time in seconds, strictly increasing.
     columns : dict[str, ndarray of shape (n,)]
-        Every column but ``t``, in file order, as float64.
+        Every numeric column but ``t``, in file order, as float64.
+    text : dict[str, ndarray of shape (n,)]
+        The text columns (:data:`TEXT_COLUMNS`) present, as str arrays.
     """
 
     path: str
     t: np.ndarray
     columns: dict[str, np.ndarray]
+    text: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def valid(self) -> np.ndarray:
@@ -57,6 +63,11 @@ class Trajectory:
             raise InputError(f"{self.path}: missing column(s) {', '.join(missing)} "
                              f"(has {', '.join(['t', *self.columns])})")
         return np.column_stack([self.columns[name] for name in names])
+
+
+#: Largest magnitude of a value: the seconds and metres of a recording stay far below it,
+#: and sums of squares of larger ones overflow float64.
+MAX_MAGNITUDE = 1e9
 
 
 def read_trajectory(path: str | os.PathLike, required: Sequence[str] = ("t", "x", "y"),
@@ -76,8 +87,8 @@ def read_trajectory(path: str | os.PathLike, required: Sequence[str] = ("t", "x"
     ------
     InputError
         Naming the file: missing/unreadable, no or bad header, missing columns, a value that is
-        not a number, NaN/inf (outside rows flagged ``valid = 0``), fewer than ``min_rows``
-        rows, time not strictly increasing.
+        not a number, NaN/inf or a magnitude above :data:`MAX_MAGNITUDE` (outside rows
+        flagged ``valid = 0``), fewer than ``min_rows`` rows, time not strictly increasing.
     """
     name = str(path)
     text = read_input_text(path, encoding="utf-8-sig")
@@ -96,14 +107,26 @@ def read_trajectory(path: str | os.PathLike, required: Sequence[str] = ("t", "x"
     body = [line for line in lines[1:] if line.strip()]
     if len(body) < min_rows:
         raise InputError(f"{name}: too short, {len(body)} data row(s), need at least {min_rows}")
+    text_index = [j for j, column in enumerate(header) if column in TEXT_COLUMNS]
+    numeric_index = [j for j in range(len(header)) if j not in text_index]
+    text = {}
+    if text_index:
+        cells = [line.split(",") for line in body]
+        if any(len(row) != len(header) for row in cells):
+            row = next(k for k, r in enumerate(cells) if len(r) != len(header))
+            raise InputError(f"{name}: {len(cells[row])} values in data row {row + 1} but "
+                             f"{len(header)} header columns")
+        text = {header[j]: np.array([row[j].strip() for row in cells]) for j in text_index}
+        body = [",".join(row[j] for j in numeric_index) for row in cells]
     try:
         data = np.loadtxt(body, delimiter=",", dtype=np.float64, ndmin=2)
     except ValueError as error:
         raise InputError(f"{name}: not a table of numbers ({error})") from None
-    if data.shape[1] != len(header):
-        raise InputError(f"{name}: {data.shape[1]} values per row but {len(header)} header columns")
+    if data.shape[1] != len(numeric_index):
+        raise InputError(f"{name}: {data.shape[1] + len(text_index)} values per row but "
+                         f"{len(header)} header columns")
 
-    columns = {column: data[:, j].copy() for j, column in enumerate(header)}
+    columns = {header[j]: data[:, k].copy() for k, j in enumerate(numeric_index)}
     t = columns.pop("t")
     valid = np.ones(t.shape, dtype=bool)
     if VALID_COLUMN in columns:
@@ -114,16 +137,22 @@ def read_trajectory(path: str | os.PathLike, required: Sequence[str] = ("t", "x"
         if not valid.any():
             raise InputError(f"{name}: no row has {VALID_COLUMN} = 1")
     for column, values in {"t": t, **columns}.items():
-        checked = values if column == "t" else values[valid]
+        rows = np.arange(t.size) if column == "t" else np.flatnonzero(valid)
+        checked = values[rows]
         bad = ~np.isfinite(checked)
         if bad.any():
-            row = int(np.flatnonzero(bad)[0]) if column == "t" else int(np.flatnonzero(valid)[bad][0])
-            raise InputError(f"{name}: column {column} has NaN or inf (data row {row + 1})")
+            raise InputError(f"{name}: column {column} has NaN or inf "
+                             f"(data row {rows[bad][0] + 1})")
+        huge = np.abs(checked) > MAX_MAGNITUDE
+        if huge.any():
+            raise InputError(f"{name}: column {column} holds {checked[huge][0]:g} (data row "
+                             f"{rows[huge][0] + 1}); seconds and metres of a recording stay "
+                             f"within +-{MAX_MAGNITUDE:g}")
     steps = np.diff(t)
     if np.any(steps <= 0):
         row = int(np.flatnonzero(steps <= 0)[0]) + 2
         raise InputError(f"{name}: time column t is not strictly increasing (data row {row})")
-    return Trajectory(path=name, t=t, columns=columns)
+    return Trajectory(path=name, t=t, columns=columns, text=text)
 
 
 def write_trajectory(path: str | os.PathLike, t: np.ndarray, columns: Mapping[str, np.ndarray],
@@ -141,7 +170,8 @@ def write_trajectory(path: str | os.PathLike, t: np.ndarray, columns: Mapping[st
         Time in seconds.
     columns : mapping of str to ndarray of shape (n,)
         Written in mapping order after ``t``; bool and integer arrays (e.g. ``valid``) are
-        written as integers, everything else with ``float_format``.
+        written as integers, str arrays (:data:`TEXT_COLUMNS`) as they are, everything
+        else with ``float_format``.
     float_format : str
         printf-style format of float values.
     """
@@ -153,7 +183,8 @@ def write_trajectory(path: str | os.PathLike, t: np.ndarray, columns: Mapping[st
     for name, values in zip(names, arrays):
         if values.shape != t.shape:
             raise ValueError(f"column {name!r} has shape {values.shape}, expected {t.shape}")
-    formats = [float_format] + ["%d" if values.dtype.kind in "biu" else float_format
+    formats = [float_format] + ["%d" if values.dtype.kind in "biu" else
+                                "%s" if values.dtype.kind in "US" else float_format
                                 for values in arrays]
     row_format = ",".join(formats)
     rows = zip(t, *arrays)

@@ -28,10 +28,11 @@ def test_cache_files_go_when_a_dependency_changes_and_stay_otherwise(tmp_path):
 
 
 def test_the_online_kernel_depends_on_every_module_compiled_into_its_loop():
-    module = importlib.import_module("wipelab.learning._online_kernel")
+    module = importlib.import_module("wipelab.learning.online_kernel")
     names = {path.name for path in dependency_files(module)}
-    assert {"_online_kernel.py", "period_detector.py", "harmonic.py", "afo.py", "oscillators.py",
-            "_dmp_kernel.py", "derivatives.py", "online.py"} <= names
+    assert {"online_kernel.py", "period_detector.py", "harmonic.py", "afo.py", "afs.py",
+            "oscillators.py", "dmp.py", "derivatives.py", "tempo.py", "position_fit.py",
+            "limit_cycle.py", "lwr.py", "normalise.py"} <= names
     assert not forget_stale_kernels(module.__name__)              # checked at import already
     refinement = importlib.import_module("wipelab.vision._refinement_kernel")
     assert "_likelihood_kernel.py" in {path.name for path in dependency_files(refinement)}

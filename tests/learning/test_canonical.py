@@ -6,9 +6,10 @@ import math
 import numpy as np
 import pytest
 
-from wipelab.learning import (AdaptiveFourierSeries, AdaptiveOscillatorPool, AFOParameters,
-                              AFSParameters, OnlineParameters, learn_online, locked_series)
-from wipelab.learning.afo import locked_pool
+from wipelab.learning import (AFOParameters, AFSParameters, OnlineParameters, learn_online,
+                              locked_series)
+from wipelab.learning.afo import locked_pool, pool_fundamental, pool_logic_step, pool_substep
+from wipelab.learning.afs import afs_lock, afs_substep
 from wipelab.learning.harmonic import LOCK_NYQUIST_FRACTION
 from wipelab.learning.signals import periods_to_tolerance, wiping_signal
 
@@ -31,14 +32,18 @@ def test_oscillators_alone_still_lock_when_no_period_is_detected():
     assert 3.0 < periods_to_tolerance(t, history.fundamental_hz, 1.0) <= 9.0
 
 
-def test_afs_follows_a_frequency_step_and_faster_with_the_gain_schedule():
+def test_afs_follows_a_frequency_step_faster_with_the_tempo_change_relock():
+    """1 -> 1.25 Hz: with a change of tempo found, the detector's period is handed over again
+    (2-2.5 periods); without, the AFS takes longer, unless the gain schedule speeds it up."""
     t = np.arange(0, 24, 1 / 100)
     Y, _ = wiping_signal(t, 1.0, seed=5, step_time_s=12.0, step_frequency_hz=1.25)
-    scheduled = OnlineParameters(afs=AFSParameters(locked_coupling=0.5, residual_gain=100.0))
+    unarmed = dict(change_threshold=None)
+    scheduled = OnlineParameters(**unarmed, afs=AFSParameters(locked_coupling=0.5,
+                                                              residual_gain=100.0))
     periods = [periods_to_tolerance(t, learn_online(t, Y, params)[1].fundamental_hz, 1.25,
                                     start_s=12.0)
-               for params in (scheduled, OnlineParameters())]
-    assert periods[0] <= 2.5 < periods[1] <= 3.5
+               for params in (OnlineParameters(), scheduled, OnlineParameters(**unarmed))]
+    assert periods[0] <= 2.5 and periods[1] <= 2.5 < periods[2] <= 3.5
 
 
 def test_locked_series_finds_frequency_phase_and_coefficients():
@@ -57,17 +62,25 @@ def test_locked_series_finds_frequency_phase_and_coefficients():
     assert not alpha[:, fitted + 1:].any() and not beta[:, fitted + 1:].any()
 
 
+def _afs_advance(state, gains, previous, current, dt):
+    """One sample interval of the AFS with one Euler substep (input at its end)."""
+    scratch = np.zeros((3, state.alpha.shape[1]))
+    afs_substep(state, gains, np.asarray(current, dtype=float), dt, dt, 0, True,
+                scratch[0, :len(current)], scratch[1], scratch[2])
+
+
 def test_afs_holds_a_lock_on_the_series_of_its_input():
     dt, omega = 0.002, 2 * np.pi * 0.8
     t = dt * np.arange(-1250, 2500)
     u = np.column_stack([np.cos(omega * t) + 0.3 * np.cos(2 * omega * t + 0.5)])
-    afs = AdaptiveFourierSeries(1)
+    params = AFSParameters()
+    afs, gains = params.new_state(1), params.gains()
     _, phase, alpha, beta = locked_series(u[:1251], dt, omega, 10, 0)
-    afs.lock(omega, phase + omega * dt, alpha, beta, dt)        # Euler: leads by one substep
+    afs_lock(afs, omega, phase + omega * dt, alpha, beta)        # Euler: leads by one substep
     for k in range(1251, t.size):
-        afs.advance(u[k - 1], u[k], dt, 1)
-        assert afs.omega_ == pytest.approx(omega, rel=1e-6)
-    lead = np.mod(afs.phase_ - omega * t[-1] + np.pi, 2 * np.pi) - np.pi
+        _afs_advance(afs, gains, u[k - 1], u[k], dt)
+        assert afs.omegas[0] == pytest.approx(omega, rel=1e-6)
+    lead = np.mod(afs.phases[0] - omega * t[-1] + np.pi, 2 * np.pi) - np.pi
     assert lead == pytest.approx(omega * dt, abs=1e-6)
 
 
@@ -86,29 +99,33 @@ def test_locked_pool_carries_offset_fundamental_and_the_stronger_harmonic():
 
 
 def test_afs_learns_the_fourier_series_of_a_clean_signal():
-    afs = AdaptiveFourierSeries(1, AFSParameters(initial_frequency_hz=1.1))
+    params = AFSParameters(initial_frequency_hz=1.1)
+    afs, gains = params.new_state(1), params.gains()
     dt = 0.002
     t = np.arange(0, 30, dt)
     u = np.cos(2 * np.pi * t) + 0.3 * np.cos(4 * np.pi * t + 0.5)
     for k in range(1, t.size):
-        afs.advance(u[k - 1:k], u[k:k + 1], dt, 1)
-    assert afs.omega_ == pytest.approx(2 * np.pi, rel=2e-3)
-    assert afs.alpha_[0, 1] == pytest.approx(1.0, abs=0.05) and afs.beta_[0, 1] == 0.0
-    assert math.hypot(afs.alpha_[0, 2], afs.beta_[0, 2]) == pytest.approx(0.3, abs=0.05)
+        _afs_advance(afs, gains, u[k - 1:k], u[k:k + 1], dt)
+    assert afs.omegas[0] == pytest.approx(2 * np.pi, rel=2e-3)
+    assert afs.alpha[0, 1] == pytest.approx(1.0, abs=0.05) and afs.beta[0, 1] == 0.0
+    assert math.hypot(afs.alpha[0, 2], afs.beta[0, 2]) == pytest.approx(0.3, abs=0.05)
 
 
 def test_afo_pool_reports_the_middle_frequency_and_resets_when_two_sit_at_zero():
-    pool = AdaptiveOscillatorPool(1, AFOParameters(reset_dwell_s=0.5))
-    pool.omegas_ = np.array([0.01, -0.02, 2 * np.pi * 1.3])
-    pool.phases_ = np.array([0.0, 1.0, 2.0])
-    assert pool.fundamental == (pytest.approx(-1.0), pytest.approx(0.02))
-    constant = np.array([1.0])
+    params = AFOParameters(reset_dwell_s=0.5)
+    pool, gains = params.new_state(1), params.gains()
+    pool.omegas[:] = [0.01, -0.02, 2 * np.pi * 1.3]
+    pool.phases[:] = [0.0, 1.0, 2.0]
+    assert pool_fundamental(pool) == (pytest.approx(-1.0), pytest.approx(0.02))
+    constant, scratch = np.array([1.0]), np.zeros((4, 3))
     steps = 0
-    while pool.resets_ == 0 and steps < 100:
-        pool.advance(constant, constant, 0.01, 1)
+    while pool.resets[0] == 0 and steps < 100:
+        pool_substep(pool, gains, constant, 0.01, 0, True, scratch[0, :1], scratch[1], scratch[2],
+                     scratch[3])
+        pool_logic_step(pool, gains, 0.01)
         steps += 1
     assert steps == 50                                               # after the 0.5 s dwell
-    np.testing.assert_allclose(pool.omegas_, 2 * np.pi * np.array(AFOParameters().initial_frequencies_hz))
+    np.testing.assert_allclose(pool.omegas, 2 * np.pi * np.array(AFOParameters().initial_frequencies_hz))
 
 
 def test_paper_gains_warp_the_phase_at_low_frequency():
@@ -119,12 +136,3 @@ def test_paper_gains_warp_the_phase_at_low_frequency():
     _, scaled = learn_online(t, Y, OnlineParameters(start_up=False))
     assert periods_to_tolerance(t, scaled.fundamental_hz, 0.3) < periods_to_tolerance(
         t, paper.fundamental_hz, 0.3)
-
-
-def test_rejects_unknown_options():
-    with pytest.raises(ValueError, match="dof_coupling"):
-        AdaptiveFourierSeries(2, dof_coupling="sum")
-    with pytest.raises(ValueError, match="M must be 3"):
-        AdaptiveOscillatorPool(1, AFOParameters(initial_frequencies_hz=(0.1, 1.0)))
-    with pytest.raises(ValueError, match="canonical"):
-        OnlineParameters(canonical="pll")

@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from wipelab.learning import (PeriodicDMP, PeriodicModel, forcing_target, kernel_activations,
+from wipelab.learning import (PeriodicModel, forcing_target, kernel_activations,
                               kernel_centres, limit_cycle, limit_cycle_basis)
+from wipelab.learning.dmp import dmp_step, max_phase_step
 from wipelab.learning.limit_cycle import _basis_spectrum
 
 
@@ -61,21 +62,11 @@ def test_basis_table_matches_the_exact_fourier_series():
 @pytest.mark.parametrize("rate_hz, frequency_hz", [(30.0, 3.0), (500.0, 0.3)])
 def test_dmp_integration_converges_to_the_limit_cycle_at_any_rate(rate_hz, frequency_hz):
     m = _random_model()
-    dmp = PeriodicDMP(m.weights, m.goal, m.amplitude, m.width)
-    dmp.reset(m.goal + 0.05, np.zeros(2))                     # off the cycle
+    y, s, scratch = m.goal + 0.05, np.zeros(2), np.zeros((3, 2))     # off the cycle
     omega, dt = 2 * np.pi * frequency_hz, 1.0 / rate_hz
     steps = int(3 * rate_hz / frequency_hz)
     for k in range(steps):
-        y = dmp.step(omega * k * dt, omega, dt)
+        dmp_step(y, s, m.goal, m.amplitude, m.weights, m.width, kernel_centres(25), 12.0, 3.0,
+                 omega * k * dt, omega, dt, max_phase_step(m.width), *scratch)
     expected = m.waveform([omega * steps * dt])[0]
     assert np.abs(y - expected).max() < 1e-4 * np.ptp(m.waveform(np.linspace(0, 6.3, 200)))
-
-
-def test_compiled_rollout_equals_the_numpy_dmp():
-    m = _random_model()
-    t, y = m.rollout(1.0, 200.0)
-    dmp = PeriodicDMP(m.weights, m.goal, m.amplitude, m.width)
-    dmp.reset(y[0], limit_cycle([m.phase_offset], m.weights, m.goal, m.amplitude, m.width,
-                                derivative=1)[0])
-    reference = [y[0]] + [dmp.step(m.phase_offset + m.omega * tk, m.omega, 1 / 200.0) for tk in t[:-1]]
-    np.testing.assert_allclose(y, np.array(reference), atol=1e-12)

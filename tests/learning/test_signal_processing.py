@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from wipelab.learning.derivatives import CentredDerivatives, savgol_centre_coefficients, window_for
-from wipelab.learning.normalise import PeriodStatistics, RecentSamples, RunningNormaliser
+from wipelab.learning.normalise import (new_period_window, new_running_range, period_statistics,
+                                        running_normalise)
 from wipelab.learning.sampling import to_uniform
 
 
@@ -55,36 +56,38 @@ def test_estimates_between_samples_follow_the_local_polynomial():
     assert omega_c == omega
 
 
-def test_period_statistics_restart_and_recent_samples():
-    statistics = PeriodStatistics(1, 0.1, capacity=50)
+def _statistics(window, value, omega, dt):
+    mean, variance = np.zeros(1), np.zeros(1)
+    period_statistics(window, np.array([value]), omega, dt, 1.0, mean, variance)
+    return mean[0], np.sqrt(2 * variance[0])
+
+
+def test_period_statistics_restart():
+    window = new_period_window(1, 50)
     for value in (5.0, 5.0, 5.0):
-        statistics.update(np.array([value]), 2 * np.pi)
-    statistics.restart()
-    mean, amplitude = statistics.update(np.array([1.0]), 2 * np.pi)
-    assert mean[0] == 1.0 and amplitude[0] == 0.0                     # the past is forgotten
-    recent = RecentSamples(2, 3)
-    for k in range(5):
-        recent.push(np.array([k, -k]))
-    np.testing.assert_array_equal(recent.last(3), [[2, -2], [3, -3], [4, -4]])
+        _statistics(window, value, 2 * np.pi, 0.1)
+    window.count[0] = 0
+    assert _statistics(window, 1.0, 2 * np.pi, 0.1) == (1.0, 0.0)    # the past is forgotten
 
 
 def test_normaliser_waits_for_one_swing_then_maps_the_range_to_unit():
     t = np.arange(0, 3, 0.01)
     y = 0.6 + 0.1 * np.cos(2 * np.pi * t)
     for tau, tolerance in ((1e6, 1e-5), (10.0, 0.25)):    # the range relaxes 10 % per second
-        normaliser = RunningNormaliser(1, 0.01, time_constant_s=tau)
-        u = np.array([normaliser.update(np.array([v]))[0] for v in y])
+        state, u = new_running_range(1), np.zeros((t.size, 1))
+        for k, v in enumerate(y):
+            running_normalise(state, np.array([v]), k == 0, 0.01 / tau, 0.0, u[k])
         assert not u[:50].any()                                      # before the first swing
-        np.testing.assert_allclose(u[100:], np.cos(2 * np.pi * t[100:]), atol=tolerance)
+        np.testing.assert_allclose(u[100:, 0], np.cos(2 * np.pi * t[100:]), atol=tolerance)
 
 
 def test_period_statistics_are_exact_over_a_fractional_period():
     dt, frequency = 0.01, 1 / 0.937                                  # 93.7 samples per period
-    statistics = PeriodStatistics(1, dt, capacity=400)
+    window = new_period_window(1, 400)
     for k in range(300):
-        mean, amplitude = statistics.update(np.array([2.0 + 0.5 * np.sin(2 * np.pi * frequency * k * dt)]),
-                                            2 * np.pi * frequency)
-    assert mean[0] == pytest.approx(2.0, abs=2e-3) and amplitude[0] == pytest.approx(0.5, rel=1e-2)
+        mean, amplitude = _statistics(window, 2.0 + 0.5 * np.sin(2 * np.pi * frequency * k * dt),
+                                      2 * np.pi * frequency, dt)
+    assert mean == pytest.approx(2.0, abs=2e-3) and amplitude == pytest.approx(0.5, rel=1e-2)
 
 
 def test_to_uniform_bridges_invalid_rows_flags_them_and_keeps_uniform_data():

@@ -62,9 +62,9 @@ def test_bad_files_raise_one_clear_error_naming_the_file(tmp_path, text, message
 def test_missing_and_unreadable_files(tmp_path):
     with pytest.raises(InputError, match=r"nope\.csv: file not found"):
         read_trajectory(tmp_path / "nope.csv")
-    with pytest.raises(InputError, match=r"cannot be read"):
+    with pytest.raises(InputError, match=r"is a directory"):
         read_trajectory(tmp_path)
     binary = tmp_path / "binary.csv"
     binary.write_bytes(b"\xff\xfe\x00\x81")
-    with pytest.raises(InputError, match=r"binary\.csv: cannot be read"):
+    with pytest.raises(InputError, match=r"binary\.csv: not a text file"):
         read_trajectory(binary)

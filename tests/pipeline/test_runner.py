@@ -96,8 +96,8 @@ def test_cli_run_reports_progress_and_bad_options_without_running_anything(learn
     result = runner.invoke(cli, ["run", str(learn_pipeline_file), "-o", str(run_dir),
                                  "--set", "rollout.periods=many"])
     assert result.exit_code == 2
-    assert result.stderr == (f"error: {learn_pipeline_file}: stage rollout: Invalid value for "
-                             f"'--periods': 'many' is not a valid float.\n")
+    assert result.stderr == (f"error: {learn_pipeline_file}: stage rollout: --periods: 'many' "
+                             f"is not a valid float\n")
     assert not (run_dir / "learn").exists()
 
     result = runner.invoke(cli, ["run", str(learn_pipeline_file), "-o", str(run_dir), "-q"])

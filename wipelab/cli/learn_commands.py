@@ -6,13 +6,13 @@ from pathlib import Path
 
 import click
 
-from wipelab.cli.options import PATH, comma_separated
+from wipelab.cli.options import OUTPUT_DIR, OUTPUT_FILE, PATH, comma_separated
 
 
 
 @click.command("learn")
 @click.argument("trajectory", type=PATH)
-@click.option("-o", "--output", "out_dir", type=PATH, required=True,
+@click.option("-o", "--output", "out_dir", type=OUTPUT_DIR, required=True,
               help="Output directory: model.json, learn.mcap, learn.rrd, manifest.json.")
 @click.option("--mode", type=click.Choice(["online", "offline"]), default="online",
               show_default=True,
@@ -46,7 +46,7 @@ def learn(trajectory: Path, out_dir: Path, mode: str, dofs: str, kernels: int,
 
 @click.command("rollout")
 @click.argument("model", type=PATH)
-@click.option("-o", "--output", "out_csv", type=PATH, required=True,
+@click.option("-o", "--output", "out_csv", type=OUTPUT_FILE, required=True,
               help="Output Trajectory CSV: t and one column per DOF.")
 @click.option("--periods", type=float, default=10.0, show_default=True,
               help="Length in periods.")

@@ -12,13 +12,14 @@ from pathlib import Path
 
 import click
 
-from wipelab.cli.options import PATH
+from wipelab.cli.options import (FRAME_RATE, JOBS, OUTPUT_DIR, OUTPUT_FILE, PATH,
+                                  SYNTH_DURATION_S, SYNTH_FREQUENCY_HZ)
 
 
 
 @click.command("run")
 @click.argument("pipeline_file", type=PATH)
-@click.option("-o", "--output", "run_dir", type=PATH, default=None,
+@click.option("-o", "--output", "run_dir", type=OUTPUT_DIR, default=None,
               help="Run directory [default: runs/<pipeline name>].")
 @click.option("--set", "sets", multiple=True, metavar="STAGE.KEY=VALUE",
               help="Override a stage parameter, e.g. --set learn.kernels=30 (repeatable).")
@@ -53,11 +54,11 @@ def run(ctx: click.Context, pipeline_file: Path, run_dir: Path | None, sets: tup
 @click.argument("data_dir", type=PATH)
 @click.option("--pipeline", "pipeline_file", type=PATH, required=True,
               help="Pipeline TOML with one [inputs] entry, replaced by each demo directory.")
-@click.option("-j", "--jobs", type=int, default=1, show_default=True,
+@click.option("-j", "--jobs", type=JOBS, default=1, show_default=True,
               help="Demos processed in parallel on this machine.")
 @click.option("--scheduler", metavar="ADDRESS", default=None,
               help="Dask distributed scheduler, e.g. tcp://127.0.0.1:8786 (instead of -j).")
-@click.option("-o", "--output", "out_dir", type=PATH, default=None,
+@click.option("-o", "--output", "out_dir", type=OUTPUT_DIR, default=None,
               help="Output directory: summary.csv and runs/<demo>/ [default: runs/dataset-<name>].")
 @click.option("--set", "sets", multiple=True, metavar="STAGE.KEY=VALUE",
               help="Override a stage parameter for every demo (repeatable).")
@@ -75,10 +76,12 @@ def dataset(ctx: click.Context, data_dir: Path, pipeline_file: Path, jobs: int,
 
     from wipelab.pipeline.dataset import (dataset_tasks, format_summary, run_dataset,
                                           write_summary_csv)
+    from wipelab.output_location import check_output_dir
     from wipelab.pipeline.spec import load_pipeline
 
     pipeline = load_pipeline(pipeline_file).with_overrides(sets=sets)
-    out_dir = out_dir if out_dir is not None else Path("runs") / f"dataset-{pipeline.name}"
+    out_dir = check_output_dir(out_dir if out_dir is not None
+                               else Path("runs") / f"dataset-{pipeline.name}")
     tasks = dataset_tasks(pipeline, data_dir, out_dir)
     with tqdm(total=len(tasks), unit="demo", desc="dataset", disable=quiet) as bar:
         def on_result(result) -> None:
@@ -100,7 +103,7 @@ def dataset(ctx: click.Context, data_dir: Path, pipeline_file: Path, jobs: int,
 
 @click.command("report")
 @click.argument("run_dir", type=PATH)
-@click.option("-o", "--output", "out_dir", type=PATH, default=None,
+@click.option("-o", "--output", "out_dir", type=OUTPUT_DIR, default=None,
               help="Where to write the figures [default: RUN_DIR/report].")
 def report(run_dir: Path, out_dir: Path | None) -> None:
     """Draw PNG figures of a run (cf. the paper's Figs. 4-7) and a markdown summary."""
@@ -112,17 +115,18 @@ def report(run_dir: Path, out_dir: Path | None) -> None:
 
 
 @click.command("synth-dataset")
-@click.argument("out_dir", type=PATH)
+@click.argument("out_dir", type=OUTPUT_DIR)
 @click.option("--pattern", "patterns", multiple=True, default=("circle", "line", "figure8"),
               show_default=True, help="Wiping pattern (repeatable).")
-@click.option("--frequency", "frequencies_hz", multiple=True, type=float, default=(1.0,),
-              show_default=True, metavar="HZ", help="Wiping frequency in Hz (repeatable).")
+@click.option("--frequency", "frequencies_hz", multiple=True, type=SYNTH_FREQUENCY_HZ,
+              default=(1.0,), show_default=True, metavar="HZ",
+              help="Wiping frequency in Hz (repeatable).")
 @click.option("--seed", "seeds", multiple=True, type=int, default=(0,), show_default=True,
               help="Random seed (repeatable).")
-@click.option("--duration", type=float, default=20.0, show_default=True, metavar="S",
-              help="Length of each demo, seconds.")
-@click.option("--fps", type=int, default=30, show_default=True, help="Frame rate.")
-@click.option("-j", "--jobs", type=int, default=1, show_default=True,
+@click.option("--duration", type=SYNTH_DURATION_S, default=20.0, show_default=True,
+              metavar="S", help="Length of each demo, seconds.")
+@click.option("--fps", type=FRAME_RATE, default=30, show_default=True, help="Frame rate.")
+@click.option("-j", "--jobs", type=JOBS, default=1, show_default=True,
               help="Demos rendered in parallel.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar.")
 def synth_dataset(out_dir: Path, patterns: tuple[str, ...], frequencies_hz: tuple[float, ...],
@@ -134,11 +138,12 @@ def synth_dataset(out_dir: Path, patterns: tuple[str, ...], frequencies_hz: tupl
     """
     from tqdm import tqdm
 
-    from wipelab.pipeline.synth_grid import grid_points, synth_grid
+    from wipelab.pipeline.synth_grid import grid_points, missing_points, synth_grid
 
     points = grid_points(patterns, frequencies_hz, seeds)
-    with tqdm(total=len(points), unit="demo", desc="synth-dataset", disable=quiet) as bar:
-        bar.update(sum((out_dir / p.name / "manifest.json").is_file() for p in points))
+    done = len(points) - len(missing_points(out_dir, points))
+    with tqdm(total=len(points), initial=done, unit="demo", desc="synth-dataset",
+              disable=quiet) as bar:
         demos = synth_grid(out_dir, points, duration, fps, jobs=jobs,
                            on_done=lambda path: bar.update(1))
     click.echo(f"{len(demos)} demos in {out_dir}")
@@ -146,7 +151,7 @@ def synth_dataset(out_dir: Path, patterns: tuple[str, ...], frequencies_hz: tupl
 
 @click.command("view")
 @click.argument("path", type=PATH)
-@click.option("--save", type=PATH, default=None,
+@click.option("--save", type=OUTPUT_FILE, default=None,
               help="Write all the recordings (each stage's, with its layout) into this one .rrd "
                    "and exit.")
 @click.option("--web", is_flag=True, help="Serve a web viewer instead (works without a display).")

@@ -10,13 +10,13 @@ from pathlib import Path
 
 import click
 
-from wipelab.cli.options import PATH, comma_separated
+from wipelab.cli.options import OUTPUT_DIR, PATH, comma_separated
 
 
 
 def _common(function):
     options = [
-        click.option("-o", "--output", "out_dir", type=PATH, required=True,
+        click.option("-o", "--output", "out_dir", type=OUTPUT_DIR, required=True,
                      help="Output directory."),
         click.option("--surface", default=None, metavar="NAME|FILE.toml",
                      help="flat, bowl, sink or a surface TOML file."),
@@ -42,7 +42,7 @@ def _common(function):
 @click.command("adapt")
 @click.argument("model", type=PATH)
 @_common
-@click.option("--periods", type=int, default=8, show_default=True,
+@click.option("--periods", type=click.IntRange(min=1), default=8, show_default=True,
               help="Most learning periods (learning stops earlier when converged).")
 @click.option("--center", default=None, metavar="X,Y",
               help="Where the centre of the path's bounding box goes (m, world) "
@@ -51,7 +51,7 @@ def _common(function):
               help="Scale of the x-y oscillation.")
 @click.option("--slowdown", type=float, default=4.0, show_default=True,
               help="Omega is divided by this while learning.")
-@click.option("--hold-periods", type=int, default=1, show_default=True,
+@click.option("--hold-periods", type=click.IntRange(min=0), default=1, show_default=True,
               help="Periods with the learned profile after learning.")
 @click.option("--tolerance", type=float, default=0.002, show_default=True,
               help="Convergence: largest change of the learned profile over a period (m).")
@@ -101,9 +101,9 @@ def adapt(model: Path, out_dir: Path, surface: str | None, force: float | None,
 @click.option("--mode", "modes", multiple=True,
               type=click.Choice(["learned", "learned+compliance", "compliance", "planar"]),
               help="Run only these modes (repeatable) [default: all four].")
-@click.option("--periods", type=int, default=3, show_default=True,
+@click.option("--periods", type=click.IntRange(min=1), default=3, show_default=True,
               help="Scored periods per scale and mode.")
-@click.option("--warmup-periods", type=int, default=1, show_default=True,
+@click.option("--warmup-periods", type=click.IntRange(min=0), default=1, show_default=True,
               help="Unscored periods first.")
 @click.option("--center", default=None, metavar="X,Y",
               help="Placement of a model without z (as in adapt).")

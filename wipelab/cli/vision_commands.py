@@ -6,17 +6,18 @@ from pathlib import Path
 
 import click
 
-from wipelab.cli.options import PATH, comma_separated
+from wipelab.cli.options import (OUTPUT_DIR, PATH, SYNTH_DURATION_S, SYNTH_FREQUENCY_HZ,
+                                  comma_separated)
 
 
 
 @click.command("synth")
-@click.argument("out_dir", type=PATH)
+@click.argument("out_dir", type=OUTPUT_DIR)
 @click.option("--pattern", type=click.Choice(["circle", "line", "figure8"]), default="circle",
               show_default=True, help="Wiping pattern on the table.")
-@click.option("--frequency", "frequency_hz", type=click.FloatRange(min=0.05, max=5.0),
+@click.option("--frequency", "frequency_hz", type=SYNTH_FREQUENCY_HZ,
               default=1.0, show_default=True, help="Wiping frequency, Hz.")
-@click.option("--duration", type=click.FloatRange(min=1.0, max=3600.0), default=30.0,
+@click.option("--duration", type=SYNTH_DURATION_S, default=30.0,
               show_default=True, help="Length of the recording, seconds.")
 @click.option("--seed", type=int, default=0, show_default=True,
               help="Seeds the motion's variation, textures, occlusions and noise.")
@@ -45,7 +46,7 @@ def synth(out_dir: Path, pattern: str, frequency_hz: float, duration: float, see
 
 @click.command("track")
 @click.argument("demo_dir", type=PATH)
-@click.option("-o", "--output", "out_dir", type=PATH, required=True,
+@click.option("-o", "--output", "out_dir", type=OUTPUT_DIR, required=True,
               help="Output directory: track.csv, track.mcap, track.rrd, manifest.json.")
 @click.option("--color", "colour", default=None,
               help="Named sponge colour (red, orange, yellow, green, cyan, blue, purple, pink) "
@@ -60,8 +61,9 @@ def synth(out_dir: Path, pattern: str, frequency_hz: float, duration: float, see
               show_default=True, help="Number of particles.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Particle filter seed.")
 @click.option("--sponge-size", default=None, metavar="L,W,H",
-              help="Sponge length, width, height in metres [default: demo.toml's sponge_size, "
-                   "else 0.110,0.075,0.030].")
+              help="Sponge length, width, height in metres, if known: the box refinement then "
+                   "reports the box centre [default: demo.toml's sponge_size, else unknown: the "
+                   "sponge is tracked by its colour region].")
 @click.option("--area-window", default="0,10", show_default=True, metavar="START,END",
               help="Time window (s) in which the demonstration area is measured (paper Fig. 3).")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar, no summary.")

@@ -22,10 +22,10 @@ Notation (per DOF j; d DOFs, N kernels):
 Only numpy and scipy (and numba for the online learner's per-sample loop) are imported here.
 """
 
-from wipelab.learning.afo import AdaptiveOscillatorPool, AFOParameters
-from wipelab.learning.afs import AdaptiveFourierSeries, AFSParameters
+from wipelab.learning.afo import AFOParameters
+from wipelab.learning.afs import AFSParameters
 from wipelab.learning.batch_fit import fit_weights
-from wipelab.learning.dmp import PeriodicDMP, forcing_target
+from wipelab.learning.dmp import forcing_target
 from wipelab.learning.harmonic import (HarmonicFit, PeriodicityEstimate, fundamental_frequency_hz,
                                        harmonic_fit, locked_series, periodicity)
 from wipelab.learning.kernels import default_width, kernel_activations, kernel_centres
@@ -35,14 +35,13 @@ from wipelab.learning.model import MODEL_FORMAT, PeriodicModel
 from wipelab.learning.offline import OfflineParameters, learn_offline
 from wipelab.learning.online import (CANONICAL_SYSTEMS, LearnHistory, OnlineLearner,
                                      OnlineParameters, learn_online)
-from wipelab.learning.period_detector import PeriodDetector, PeriodDetectorParameters
+from wipelab.learning.period_detector import PeriodDetectorParameters
 from wipelab.learning.sampling import to_uniform
 
 __all__ = [
-    "AFOParameters", "AFSParameters", "AdaptiveFourierSeries", "AdaptiveOscillatorPool",
-    "CANONICAL_SYSTEMS", "HarmonicFit", "IncrementalLWR", "LearnHistory", "MODEL_FORMAT",
-    "OfflineParameters", "OnlineLearner", "OnlineParameters", "PeriodDetector",
-    "PeriodDetectorParameters", "PeriodicDMP", "PeriodicModel", "PeriodicityEstimate",
+    "AFOParameters", "AFSParameters", "CANONICAL_SYSTEMS", "HarmonicFit", "IncrementalLWR", "LearnHistory", "MODEL_FORMAT",
+    "OfflineParameters", "OnlineLearner", "OnlineParameters",
+    "PeriodDetectorParameters", "PeriodicModel", "PeriodicityEstimate",
     "default_width", "fit_weights", "forcing_target", "fundamental_frequency_hz", "harmonic_fit",
     "kernel_activations", "kernel_centres", "learn_offline", "learn_online", "limit_cycle",
     "limit_cycle_basis", "locked_series", "periodicity", "to_uniform",

@@ -16,8 +16,9 @@ unit offset (see :mod:`wipelab.learning.normalise`). Several DOFs share the osci
 (see :mod:`wipelab.learning.oscillators`); non-reference DOFs add a sine coefficient beta_i to
 eq. 4 with the analogue of eq. 5.
 
-When the start-up detector has found the period, the learner sets the pool to the state it
-would converge to (:func:`locked_pool`): 0 Hz with the offset, the fundamental, and the
+Integrated with explicit Euler substeps (:func:`pool_substep`, compiled; the online learner
+calls it). When the start-up detector has found the period, the learner sets the pool to
+the state it would converge to (:func:`locked_pool`, :func:`pool_lock`): 0 Hz with the offset, the fundamental, and the
 stronger of the 2nd and 3rd harmonics. The gain schedule that steadies the locked AFS
 slows the pool down after a frequency step (see :mod:`wipelab.learning.oscillators`), so it
 is off by default here (c_L = 1, kappa = 0).
@@ -29,9 +30,12 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
-from wipelab.learning.oscillators import (DOF_COUPLINGS, gain_scale, interpolated_inputs,
-                                          nearest_turn, phase_drive, residual_step)
+from wipelab.learning.oscillators import (OscillatorGains, OscillatorState, gain_scale,
+                                          locked_boost, nearest_turn, new_oscillator_state,
+                                          phase_drive)
+from wipelab.numba_cache import forget_stale_kernels
 
 
 @dataclass(frozen=True)
@@ -61,120 +65,119 @@ class AFOParameters:
         return cls(initial_frequencies_hz=(0.2, 1.0, 3.0), coupling=20.0, frequency_coupling=20.0,
                    learning_rate=1.0, scale_with_frequency=False)
 
+    def gains(self) -> OscillatorGains:
+        """The gains in the compiled substep's units (rad/s)."""
+        return OscillatorGains(
+            coupling=self.coupling, frequency_coupling=self.frequency_coupling,
+            learning_rate=self.learning_rate, scale_with_frequency=self.scale_with_frequency,
+            min_omega=-2.0 * math.pi * self.max_frequency_hz,
+            max_omega=2.0 * math.pi * self.max_frequency_hz,
+            locked_coupling=self.locked_coupling, residual_gain=self.residual_gain,
+            residual_periods=self.residual_periods,
+            zero_omega=2.0 * math.pi * self.zero_frequency_hz, reset_dwell_s=self.reset_dwell_s)
 
-class AdaptiveOscillatorPool:
-    """The AFO pool canonical system for d DOFs (reference implementation, numpy).
-
-    Attributes
-    ----------
-    phases_ : ndarray, shape (M,)
-        phi_i (rad), unwrapped.
-    omegas_ : ndarray, shape (M,)
-        omega_i (rad/s); may be negative (the oscillator then runs backwards).
-    alpha_, beta_ : ndarray, shape (M, d)
-        Cosine and sine amplitude per oscillator and DOF (beta of the reference DOF held at 0).
-    resets_ : int
-        Number of resets so far.
-    """
-
-    def __init__(self, n_dofs: int, params: AFOParameters = AFOParameters(), reference: int = 0,
-                 dof_coupling: str = "mean"):
-        if dof_coupling not in DOF_COUPLINGS:
-            raise ValueError(f"dof_coupling must be one of {DOF_COUPLINGS}, got {dof_coupling!r}")
-        if len(params.initial_frequencies_hz) != 3:
+    def new_state(self, n_dofs: int) -> OscillatorState:
+        """The pool at rest: omega_i(0), phases 0, no amplitudes (3 per DOF)."""
+        if len(self.initial_frequencies_hz) != 3:
             raise ValueError("the logic step picks the middle of three oscillators: M must be 3")
-        self.params = params
-        self.reference = reference
-        self.mean_coupling = dof_coupling == "mean"
-        self.initial_omegas = 2.0 * math.pi * np.asarray(params.initial_frequencies_hz, dtype=np.float64)
-        self.phases_ = np.zeros(3)
-        self.omegas_ = self.initial_omegas.copy()
-        self.alpha_ = np.zeros((3, n_dofs))
-        self.beta_ = np.zeros((3, n_dofs))
-        self.resets_ = 0
-        self._zero_time = 0.0
-        self.locked_ = False
-        self.residual_ = 0.0
-
-    def _substep(self, u: np.ndarray, h: float) -> None:
-        p = self.params
-        m = gain_scale(self.fundamental[1], p.scale_with_frequency)
-        cos_i, sin_i = np.cos(self.phases_), np.sin(self.phases_)
-        error = u - (cos_i @ self.alpha_ + sin_i @ self.beta_)                 # eqs. 3-4
-        drive = phase_drive(error, self.phases_, self.alpha_, self.beta_, self.reference,
-                            self.mean_coupling)
-        if self.locked_:
-            self.residual_ = residual_step(self.residual_, error, self.fundamental[1], h,
-                                           p.residual_periods)
-            drive = drive * (p.locked_coupling + p.residual_gain * self.residual_)
-        self.phases_ = self.phases_ + h * (self.omegas_ - p.coupling * m * drive)          # eq. 1
-        limit = 2.0 * math.pi * p.max_frequency_hz
-        self.omegas_ = np.clip(self.omegas_ - h * p.frequency_coupling * m * m * drive,
-                               -limit, limit)                                              # eq. 2
-        self.alpha_ += (h * p.learning_rate * m) * np.outer(cos_i, error)                  # eq. 5
-        self.beta_ += (h * p.learning_rate * m) * np.outer(sin_i, error)
-        self.beta_[:, self.reference] = 0.0
-
-    def _logic_step(self, dt: float) -> None:
-        """Reset the pool when more than one oscillator has sat at 0 Hz for reset_dwell_s."""
-        near_zero = np.abs(self.omegas_) < 2.0 * math.pi * self.params.zero_frequency_hz
-        self._zero_time = self._zero_time + dt if near_zero.sum() > 1 else 0.0
-        if self._zero_time >= self.params.reset_dwell_s:
-            self.omegas_ = self.initial_omegas.copy()
-            self.alpha_[:] = 0.0
-            self.beta_[:] = 0.0
-            self._zero_time = 0.0
-            self.resets_ += 1
-            self.locked_ = False
-
-    def lock(self, omega: float, phase: float, alpha: np.ndarray, beta: np.ndarray, dt: float) -> None:
-        """Start from a known fundamental and series (see :func:`locked_pool`); dt is unused
-        (the pool has no Nyquist cut-off). Each phase moves by less than half a turn."""
-        del dt
-        omegas, phases, pool_alpha, pool_beta = locked_pool(omega, phase, alpha, beta, self.reference)
-        self.phases_ = self.phases_ + np.array([nearest_turn(v) for v in phases - self.phases_])
-        self.omegas_ = omegas
-        self.alpha_, self.beta_ = pool_alpha.T.copy(), pool_beta.T.copy()
-        self._zero_time = 0.0
-        self.locked_ = True
-        self.residual_ = 0.0
-
-    def advance(self, previous: np.ndarray, current: np.ndarray, dt: float, n_sub: int) -> None:
-        """Integrate over one sample interval dt (input (d,) linear from previous to current),
-        then apply the logic step."""
-        h = dt / n_sub
-        for u in interpolated_inputs(previous, current, n_sub):
-            self._substep(u, h)
-        self._logic_step(dt)
-
-    def free_run(self, dt: float) -> None:
-        """Advance dt without input (a gap): every phase at its own omega, nothing learned."""
-        self.phases_ = self.phases_ + dt * self.omegas_
-
-    @property
-    def frequencies_hz(self) -> np.ndarray:
-        """|omega_i| / 2 pi of the M oscillators (Hz), shape (M,) (the paper's Fig. 4)."""
-        return np.abs(self.omegas_) / (2.0 * math.pi)
-
-    @property
-    def fundamental(self) -> tuple[float, float]:
-        """(phase in rad, Omega in rad/s) of the middle-frequency oscillator (the logic step).
-
-        An oscillator with negative omega runs backwards; its phase is negated so that the
-        returned phase always advances at +Omega.
-        """
-        middle = int(np.argsort(np.abs(self.omegas_), kind="stable")[1])
-        sign = 1.0 if self.omegas_[middle] >= 0.0 else -1.0
-        return sign * self.phases_[middle], abs(self.omegas_[middle])
+        return new_oscillator_state(n_dofs, 2.0 * math.pi * np.asarray(self.initial_frequencies_hz), 3)
 
 
+@njit(cache=True)
+def pool_fundamental(state: OscillatorState) -> tuple[float, float]:
+    """(phase in rad, Omega in rad/s) of the middle-frequency oscillator (the logic step).
+
+    An oscillator with negative omega runs backwards; its phase is negated so that the
+    returned phase always advances at +Omega.
+    """
+    omegas = state.omegas
+    order = [0, 1, 2]                     # stable sort of |omega_i|, the middle one
+    for i in range(3):
+        for j in range(2 - i):
+            if abs(omegas[order[j]]) > abs(omegas[order[j + 1]]):
+                order[j], order[j + 1] = order[j + 1], order[j]
+    middle = order[1]
+    sign = 1.0 if omegas[middle] >= 0.0 else -1.0
+    return sign * state.phases[middle], abs(omegas[middle])
+
+
+@njit(cache=True)
+def pool_substep(state: OscillatorState, gains: OscillatorGains, u, h: float, reference: int,
+                 mean_coupling: bool, error, cosines, sines, drives) -> None:
+    """One explicit Euler substep of h seconds of eqs. 1-5 with input u (d,), in place.
+
+    error (d,), cosines, sines and drives (3,) are scratch arrays.
+    """
+    alpha, beta, phases, omegas = state.alpha, state.beta, state.phases, state.omegas
+    fundamental = pool_fundamental(state)[1]
+    m = gain_scale(fundamental, gains.scale_with_frequency)
+    for i in range(3):
+        cosines[i] = math.cos(phases[i])
+        sines[i] = math.sin(phases[i])
+    for j in range(u.shape[0]):
+        prediction = 0.0
+        for i in range(3):
+            prediction += alpha[j, i] * cosines[i] + beta[j, i] * sines[i]      # eq. 4
+        error[j] = u[j] - prediction                                          # eq. 3
+    for i in range(3):
+        drives[i] = phase_drive(error, sines[i], cosines[i], alpha, beta, i, reference,
+                                mean_coupling)
+    boost = locked_boost(state, gains, error, fundamental, h)
+    for i in range(3):
+        drive = drives[i] * boost
+        phases[i] += h * (omegas[i] - gains.coupling * m * drive)                    # eq. 1
+        omega = omegas[i] - h * gains.frequency_coupling * m * m * drive              # eq. 2
+        omegas[i] = min(max(omega, gains.min_omega), gains.max_omega)
+    rate = h * gains.learning_rate * m
+    for j in range(u.shape[0]):
+        for i in range(3):
+            alpha[j, i] += rate * error[j] * cosines[i]                              # eq. 5
+            beta[j, i] += rate * error[j] * sines[i]
+    for i in range(3):
+        beta[reference, i] = 0.0
+
+
+@njit(cache=True)
+def pool_logic_step(state: OscillatorState, gains: OscillatorGains, dt: float) -> None:
+    """Reset the pool when more than one oscillator has sat at 0 Hz for reset_dwell_s."""
+    near_zero = 0
+    for i in range(3):
+        if abs(state.omegas[i]) < gains.zero_omega:
+            near_zero += 1
+    state.zero_time[0] = state.zero_time[0] + dt if near_zero > 1 else 0.0
+    if state.zero_time[0] >= gains.reset_dwell_s:
+        state.omegas[:] = state.initial_omegas
+        state.alpha[:] = 0.0
+        state.beta[:] = 0.0
+        state.zero_time[0] = 0.0
+        state.resets[0] += 1.0
+        state.locked[0] = 0.0
+
+
+@njit(cache=True)
+def pool_lock(state: OscillatorState, omega: float, phase: float, alpha, beta,
+              reference: int) -> None:
+    """Start from a known fundamental and series (:func:`locked_pool`); each phase moves by
+    less than half a turn."""
+    omegas, phases, pool_alpha, pool_beta = locked_pool(omega, phase, alpha, beta, reference)
+    for i in range(3):
+        state.phases[i] += nearest_turn(phases[i] - state.phases[i])
+        state.omegas[i] = omegas[i]
+    state.alpha[:] = pool_alpha
+    state.beta[:] = pool_beta
+    state.zero_time[0] = 0.0
+    state.locked[0] = 1.0
+    state.residual[0] = 0.0
+
+
+@njit(cache=True)
 def locked_pool(omega: float, phase: float, alpha: np.ndarray, beta: np.ndarray,
                 reference: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The pool state that a known fundamental and series converge to.
 
     Oscillator 1 sits at 0 Hz and carries the offset, oscillator 2 the fundamental (phase
     ``phase``), oscillator 3 the stronger of the 2nd and 3rd harmonics, with its own phase so
-    that the reference DOF's beta is 0. Loops only: the online kernel compiles this function.
+    that the reference DOF's beta is 0.
 
     Parameters
     ----------
@@ -218,3 +221,6 @@ def locked_pool(omega: float, phase: float, alpha: np.ndarray, beta: np.ndarray,
     omegas = np.array([0.0, omega, k * omega])
     phases = np.array([0.0, phase, k * phase - theta])
     return omegas, phases, pool_alpha, pool_beta
+
+
+forget_stale_kernels(__name__)

@@ -16,13 +16,14 @@ the top of the expected range (3 Hz for wiping), and the gains scale with the fr
 
 In the learner the approach from above is only the fallback: the start-up period detector
 normally hands the series its frequency, phase and coefficients after about two periods
-(:meth:`AdaptiveFourierSeries.lock`). A gain schedule after the lock (couple weakly while
+(:func:`afs_lock`). A gain schedule after the lock (couple weakly while
 the series fits, strongly while its residual is large) is available and off by default: see
 :mod:`wipelab.learning.oscillators`.
 
 ``AFSParameters.petric()`` gives the published constant gains. Several DOFs share phi and
-Omega. Integrated with explicit Euler substeps; series terms at or above the Nyquist
-frequency of the samples are switched off.
+Omega. Integrated with explicit Euler substeps (:func:`afs_substep`, compiled; the online
+learner calls it); series terms at or above the Nyquist frequency of the samples are
+switched off.
 """
 
 from __future__ import annotations
@@ -30,10 +31,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
+from numba import njit
 
-from wipelab.learning.oscillators import (DOF_COUPLINGS, gain_scale, interpolated_inputs,
-                                          nearest_turn, phase_drive, residual_step)
+from wipelab.learning.oscillators import (OscillatorGains, OscillatorState, gain_scale,
+                                          locked_boost, nearest_turn, new_oscillator_state,
+                                          phase_drive)
+from wipelab.numba_cache import forget_stale_kernels
 
 
 @dataclass(frozen=True)
@@ -65,97 +68,71 @@ class AFSParameters:
                    scale_with_frequency=False, initial_frequency_hz=1.0, locked_coupling=1.0,
                    residual_gain=0.0)
 
+    def gains(self) -> OscillatorGains:
+        """The gains in the compiled substep's units (rad/s)."""
+        return OscillatorGains(
+            coupling=self.coupling, frequency_coupling=self.frequency_coupling,
+            learning_rate=self.learning_rate, scale_with_frequency=self.scale_with_frequency,
+            min_omega=2.0 * math.pi * self.min_frequency_hz,
+            max_omega=2.0 * math.pi * self.max_frequency_hz,
+            locked_coupling=self.locked_coupling, residual_gain=self.residual_gain,
+            residual_periods=self.residual_periods, zero_omega=0.0, reset_dwell_s=math.inf)
 
-class AdaptiveFourierSeries:
-    """The AFS canonical system for d DOFs (reference implementation, numpy).
+    def new_state(self, n_dofs: int) -> OscillatorState:
+        """The AFS at rest: Omega(0), phi = 0, no series (M + 1 coefficients per DOF)."""
+        return new_oscillator_state(n_dofs, [2.0 * math.pi * self.initial_frequency_hz],
+                                    self.n_terms + 1)
 
-    Attributes
-    ----------
-    phase_ : float
-        phi (rad), unwrapped.
-    omega_ : float
-        Omega (rad/s).
-    alpha_, beta_ : ndarray, shape (d, M + 1)
-        Cosine and sine coefficients per DOF, index c = 0..M (normalised input units).
+
+@njit(cache=True)
+def afs_substep(state: OscillatorState, gains: OscillatorGains, u, h: float, dt: float,
+                reference: int, mean_coupling: bool, error, cosines, sines) -> None:
+    """One explicit Euler substep of h seconds of the AFS with input u (d,), in place.
+
+    dt is the sample interval: terms c with c Omega dt >= pi (at or above Nyquist) are off.
+    error (d,), cosines and sines (M + 1,) are scratch arrays.
     """
+    alpha, beta = state.alpha, state.beta
+    phase, omega = state.phases[0], state.omegas[0]
+    m = gain_scale(omega, gains.scale_with_frequency)
+    n_terms = 0
+    while n_terms < alpha.shape[1] and n_terms * omega * dt < math.pi:
+        n_terms += 1
+    # cos(c phi), sin(c phi) by the angle-addition recurrence: two trig calls, not 2 M.
+    cos_phi, sin_phi = math.cos(phase), math.sin(phase)
+    cosines[0], sines[0] = 1.0, 0.0
+    for c in range(1, n_terms):
+        cosines[c] = cosines[c - 1] * cos_phi - sines[c - 1] * sin_phi
+        sines[c] = sines[c - 1] * cos_phi + cosines[c - 1] * sin_phi
+    for j in range(u.shape[0]):
+        prediction = 0.0
+        for c in range(n_terms):
+            prediction += alpha[j, c] * cosines[c] + beta[j, c] * sines[c]
+        error[j] = u[j] - prediction                                    # the series' eq. 3
+    drive = phase_drive(error, sin_phi, cos_phi, alpha, beta, 1, reference, mean_coupling)
+    drive *= locked_boost(state, gains, error, omega, h)
+    state.phases[0] = phase + h * (omega - gains.coupling * m * drive)            # eq. 1
+    omega -= h * gains.frequency_coupling * m * m * drive                          # eq. 2
+    state.omegas[0] = min(max(omega, gains.min_omega), gains.max_omega)
+    rate = h * gains.learning_rate * m
+    for j in range(u.shape[0]):
+        for c in range(n_terms):
+            alpha[j, c] += rate * error[j] * cosines[c]
+            beta[j, c] += rate * error[j] * sines[c]
+    beta[reference, 1] = 0.0
 
-    def __init__(self, n_dofs: int, params: AFSParameters = AFSParameters(), reference: int = 0,
-                 dof_coupling: str = "mean"):
-        if dof_coupling not in DOF_COUPLINGS:
-            raise ValueError(f"dof_coupling must be one of {DOF_COUPLINGS}, got {dof_coupling!r}")
-        self.params = params
-        self.reference = reference
-        self.mean_coupling = dof_coupling == "mean"
-        self.harmonics = np.arange(params.n_terms + 1)
-        self.phase_ = 0.0
-        self.omega_ = 2.0 * math.pi * params.initial_frequency_hz
-        self.alpha_ = np.zeros((n_dofs, params.n_terms + 1))
-        self.beta_ = np.zeros((n_dofs, params.n_terms + 1))
-        self.dt = math.inf
-        self.locked_ = False
-        self.residual_ = 0.0
 
-    def _substep(self, u: np.ndarray, h: float) -> None:
-        p = self.params
-        m = gain_scale(self.omega_, p.scale_with_frequency)
-        angles = self.harmonics * self.phase_
-        # Terms at or above the Nyquist frequency of the samples cannot be observed: off.
-        observable = self.harmonics * self.omega_ * self.dt < math.pi
-        cos_c = np.where(observable, np.cos(angles), 0.0)
-        sin_c = np.where(observable, np.sin(angles), 0.0)
-        error = u - (self.alpha_ @ cos_c + self.beta_ @ sin_c)
-        drive = phase_drive(error, self.phase_, self.alpha_[:, 1], self.beta_[:, 1],
-                            self.reference, self.mean_coupling)
-        if self.locked_:
-            self.residual_ = residual_step(self.residual_, error, self.omega_, h, p.residual_periods)
-            drive = drive * (p.locked_coupling + p.residual_gain * self.residual_)
-        self.phase_ += h * (self.omega_ - p.coupling * m * drive)
-        omega = self.omega_ - h * p.frequency_coupling * m * m * drive
-        self.omega_ = min(max(omega, 2.0 * math.pi * p.min_frequency_hz),
-                          2.0 * math.pi * p.max_frequency_hz)
-        self.alpha_ += (h * p.learning_rate * m) * error[:, None] * cos_c
-        self.beta_ += (h * p.learning_rate * m) * error[:, None] * sin_c
-        self.beta_[self.reference, 1] = 0.0
+@njit(cache=True)
+def afs_lock(state: OscillatorState, omega: float, phase: float, alpha, beta) -> None:
+    """Start from a known frequency and series (:func:`~wipelab.learning.harmonic.locked_series`):
+    Omega (rad/s), phi now (rad; the nearest equivalent angle to the current phase is
+    taken), coefficients (d, M + 1) in phi."""
+    state.omegas[0] = omega
+    state.phases[0] += nearest_turn(phase - state.phases[0])
+    state.alpha[:] = alpha
+    state.beta[:] = beta
+    state.locked[0] = 1.0
+    state.residual[0] = 0.0
 
-    def lock(self, omega: float, phase: float, alpha: np.ndarray, beta: np.ndarray, dt: float) -> None:
-        """Start from a known frequency and series (see :func:`~wipelab.learning.harmonic.locked_series`).
 
-        Parameters
-        ----------
-        omega : float
-            Omega (rad/s).
-        phase : float
-            phi now (rad); the nearest equivalent angle to the current phase is taken.
-        alpha, beta : ndarray, shape (d, M + 1)
-            Series coefficients in phi.
-        dt : float
-            Sample interval (s).
-        """
-        self.dt = dt
-        self.omega_ = float(omega)
-        self.phase_ += nearest_turn(phase - self.phase_)
-        self.alpha_ = np.array(alpha, dtype=np.float64)
-        self.beta_ = np.array(beta, dtype=np.float64)
-        self.locked_ = True
-        self.residual_ = 0.0
-
-    def advance(self, previous: np.ndarray, current: np.ndarray, dt: float, n_sub: int) -> None:
-        """Integrate over one sample interval dt with the input (d,) linear from previous to current."""
-        self.dt = dt
-        h = dt / n_sub
-        for u in interpolated_inputs(previous, current, n_sub):
-            self._substep(u, h)
-
-    def free_run(self, dt: float) -> None:
-        """Advance dt without input (a gap): phi at Omega, nothing learned."""
-        self.phase_ += dt * self.omega_
-
-    @property
-    def frequencies_hz(self) -> np.ndarray:
-        """The oscillator frequency as an array of one (Hz), for logging like the AFO pool."""
-        return np.array([self.omega_ / (2.0 * math.pi)])
-
-    @property
-    def fundamental(self) -> tuple[float, float]:
-        """(phase phi in rad, instantaneous Omega in rad/s)."""
-        return self.phase_, self.omega_
+forget_stale_kernels(__name__)

@@ -47,8 +47,13 @@ def fit_weights(phase: np.ndarray, Y: np.ndarray, goal: np.ndarray, amplitude: n
     """
     basis = limit_cycle_basis(phase, n_kernels, width, alpha_s, beta_s)        # (n, N)
     gram = basis.T @ basis
-    second_difference = np.roll(np.eye(n_kernels), -1, axis=1) - 2.0 * np.eye(n_kernels) \
-        + np.roll(np.eye(n_kernels), 1, axis=1)
-    gram += smoothing * np.trace(gram) / n_kernels * (second_difference.T @ second_difference)
+    gram += smoothness_penalty(n_kernels, smoothing * np.trace(gram) / n_kernels)
     targets = (np.asarray(Y, dtype=np.float64) - goal) / amplitude              # (n, d)
     return np.linalg.solve(gram, basis.T @ targets).T
+
+
+def smoothness_penalty(n_kernels: int, weight: float) -> np.ndarray:
+    """weight x D^T D, D the circular second differences over the N kernels; shape (N, N)."""
+    second_difference = np.roll(np.eye(n_kernels), -1, axis=1) - 2.0 * np.eye(n_kernels) \
+        + np.roll(np.eye(n_kernels), 1, axis=1)
+    return weight * (second_difference.T @ second_difference)

@@ -12,7 +12,8 @@ The same polynomial also gives position, velocity and acceleration *between* sam
 for 25 kernels: the samples fall on ten phases, and a kernel between two of them learns only
 from its tails. Updating the regression at points within half a sample of the centre,
 spaced by at most half the kernel spacing, covers every kernel (see
-:func:`wipelab.learning.online.update_points`).
+:func:`wipelab.learning.online.update_points`; the online kernel calls
+:func:`evaluate_polynomial`).
 """
 
 from __future__ import annotations
@@ -21,6 +22,9 @@ import math
 from functools import lru_cache
 
 import numpy as np
+from numba import njit
+
+from wipelab.numba_cache import forget_stale_kernels
 
 MIN_WINDOW = 5
 
@@ -49,6 +53,7 @@ def polynomial_fit_matrix(window: int, degree: int) -> np.ndarray:
     return matrix
 
 
+@njit(cache=True)
 def evaluate_polynomial(coefficients: np.ndarray, x: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Value, 1st and 2nd derivative (per sample^k) at x samples from the centre.
 
@@ -179,3 +184,6 @@ class CentredDerivatives:
         estimates = np.array([evaluate_polynomial(coefficients, x) for x in offsets])  # (S, 3, d)
         return (estimates[:, 0], estimates[:, 1] / self.dt, estimates[:, 2] / self.dt ** 2,
                 self.phases_[centre] + offsets * omega_c * self.dt, omega_c)
+
+
+forget_stale_kernels(__name__)

@@ -16,9 +16,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from numba.extending import register_jitable
 
 from wipelab.linalg import solve_positive_definite
+from wipelab.numba_cache import forget_stale_kernels
 
 #: Most harmonics a fit uses (fewer when they would pass Nyquist).
 MAX_HARMONICS = 8
@@ -310,6 +312,7 @@ def _recent_fit(U: np.ndarray, dt: float, omega: float, terms: int):
 
 
 
+@njit(cache=True)
 def locked_series(U: np.ndarray, dt: float, omega: float, n_terms: int, reference: int,
                   search: float = 0.0) -> tuple[float, float, np.ndarray, np.ndarray]:
     """Frequency, phase and Fourier series of recent input, in a canonical system's phase.
@@ -319,8 +322,7 @@ def locked_series(U: np.ndarray, dt: float, omega: float, n_terms: int, referenc
     smallest residual (golden section, on at most LOCK_SEARCH_SAMPLES evenly strided
     samples), rewritten in the phase phi = w t - theta that makes the reference DOF's
     fundamental a cosine (beta_1 = 0 for it, the convention of the AFS and the AFO pool).
-    Written with loops and numba-supported calls: the online kernel compiles this very
-    function.
+    Compiled: the online learner's hand-over calls it.
 
     Parameters
     ----------
@@ -380,3 +382,6 @@ def locked_series(U: np.ndarray, dt: float, omega: float, n_terms: int, referenc
             beta[j, c] = b * math.cos(c * theta) - a * math.sin(c * theta)
     beta[reference, 1] = 0.0
     return omega, -theta, alpha, beta
+
+
+forget_stale_kernels(__name__)

@@ -13,8 +13,10 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
+from numba import njit
 
 from wipelab.learning.kernels import kernel_activations
+from wipelab.numba_cache import forget_stale_kernels
 
 #: Harmonics whose magnitude is below this fraction of the largest are dropped (numerical zero).
 _NEGLIGIBLE = 1e-14
@@ -57,6 +59,30 @@ def _basis_table(n_kernels: int, width: float, alpha_s: float, beta_s: float,
     return table
 
 
+def basis_table(n_kernels: int, width: float, alpha_s: float = 12.0, beta_s: float = 3.0,
+                derivative: int = 0) -> np.ndarray:
+    """The table :func:`basis_row` interpolates: B_i (or a phase derivative) at TABLE_SIZE
+    phases per period, plus the first row again; shape (TABLE_SIZE + 1, N), read-only."""
+    return _basis_table(int(n_kernels), float(width), float(alpha_s), float(beta_s), int(derivative))
+
+
+@njit(cache=True)
+def basis_row(table, phase: float, out) -> None:
+    """B(phi) (N,) into out by linear interpolation in a :func:`basis_table`."""
+    size = table.shape[0] - 1
+    position = (phase % (2.0 * np.pi)) * (size / (2.0 * np.pi))
+    index = min(int(position), size - 1)
+    fraction = position - index
+    for i in range(out.shape[0]):
+        out[i] = table[index, i] * (1.0 - fraction) + table[index + 1, i] * fraction
+
+
+@njit(cache=True)
+def _basis_rows(table, phases, out):
+    for k in range(phases.shape[0]):
+        basis_row(table, phases[k], out[k])
+
+
 def limit_cycle_basis(phase, n_kernels: int, width: float, alpha_s: float = 12.0,
                       beta_s: float = 3.0, derivative: int = 0) -> np.ndarray:
     """Responses B_i(phi) (or their phase derivatives) of eqs. 6-7 to each normalised kernel.
@@ -79,12 +105,11 @@ def limit_cycle_basis(phase, n_kernels: int, width: float, alpha_s: float = 12.0
     -------
     ndarray, shape (n, N)
     """
-    table = _basis_table(int(n_kernels), float(width), float(alpha_s), float(beta_s), int(derivative))
-    position = np.mod(np.asarray(phase, dtype=np.float64).reshape(-1), 2.0 * np.pi) \
-        * (TABLE_SIZE / (2.0 * np.pi))
-    index = np.minimum(position.astype(np.int64), TABLE_SIZE - 1)
-    fraction = (position - index)[:, None]
-    return table[index] * (1.0 - fraction) + table[index + 1] * fraction
+    table = basis_table(n_kernels, width, alpha_s, beta_s, derivative)
+    phases = np.ascontiguousarray(np.asarray(phase, dtype=np.float64).reshape(-1))
+    out = np.empty((phases.size, table.shape[1]))
+    _basis_rows(table, phases, out)
+    return out
 
 
 def limit_cycle(phase, weights: np.ndarray, goal: np.ndarray, amplitude: np.ndarray, width: float,
@@ -112,3 +137,6 @@ def limit_cycle(phase, weights: np.ndarray, goal: np.ndarray, amplitude: np.ndar
     basis = limit_cycle_basis(phase, weights.shape[1], width, alpha_s, beta_s, derivative)
     y = (basis @ weights.T) * np.asarray(amplitude, dtype=np.float64)
     return y + np.asarray(goal, dtype=np.float64) if derivative == 0 else y
+
+
+forget_stale_kernels(__name__)

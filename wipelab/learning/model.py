@@ -19,8 +19,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from wipelab.learning._dmp_kernel import rollout
-from wipelab.learning.dmp import max_phase_step
+from wipelab.learning.dmp import max_phase_step, rollout
 from wipelab.learning.kernels import kernel_centres
 from wipelab.learning.limit_cycle import limit_cycle
 
@@ -152,7 +151,7 @@ class PeriodicModel:
                 amplitude=None, goal=None) -> tuple[np.ndarray, np.ndarray]:
         """Integrate eqs. 6-7 from the limit cycle (no start-up transient).
 
-        The same RK4 phase-domain integration as :meth:`PeriodicDMP.step`, compiled.
+        The RK4 phase-domain integration of :func:`~wipelab.learning.dmp.dmp_step`.
 
         Parameters
         ----------

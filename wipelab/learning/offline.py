@@ -87,6 +87,7 @@ def learn_offline(t: np.ndarray, Y: np.ndarray, params: OfflineParameters = Offl
                           source=source or {})
     history = LearnHistory(t=t, input=Y, output=model.waveform(phase), phase=phase,
                            fundamental_hz=np.full(n, fit.frequency_hz),
+                           frequency_hz=np.full(n, fit.frequency_hz),
                            oscillators_hz=np.full((n, 1), fit.frequency_hz),
                            weights_t=t[-1:], weights=weights[None], valid=valid,
                            hand_overs=np.zeros(n, dtype=np.int64))

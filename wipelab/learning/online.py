@@ -38,9 +38,13 @@ worst 9.7 %); the price is that after a deliberate change of tempo the
 model frequency mixes the two until 40 periods have passed (the history's fundamental follows
 within about three).
 
-:class:`OnlineLearner` is the reference implementation, composed of the numpy classes of this
-package; :func:`learn_online` runs the same algorithm through a numba kernel
-(:mod:`wipelab.learning._online_kernel`) unless asked for the reference.
+:class:`OnlineLearner` is the one implementation: ``step`` (one sample, as a live session
+calls it) and ``process`` (many, in a compiled loop) run the same compiled step
+(:mod:`wipelab.learning.online_kernel`). The model's frequency is per tempo segment
+(:mod:`wipelab.learning.tempo`), and by default the weights are fitted to positions through
+the limit cycle (:mod:`wipelab.learning.position_fit`); the numbers below about eqs. 13-15
+are for ``regression="lwr"``. Issue 11's numbers (held-out demonstrations of
+:mod:`wipelab.learning.demonstrator`) are in ``benchmarks/bench_learn.py``.
 
 All numbers below are from ``benchmarks/bench_learn.py`` (two DOFs with 2nd and 3rd
 harmonics and 2 % noise; 0.3, 0.5, 1, 2, 3 Hz at 30 and 500 Hz; worst of two noise seeds)
@@ -96,19 +100,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from wipelab.learning.afo import AdaptiveOscillatorPool, AFOParameters
-from wipelab.learning.afs import AdaptiveFourierSeries, AFSParameters
-from wipelab.learning.derivatives import CentredDerivatives
-from wipelab.learning.dmp import PeriodicDMP, forcing_target
-from wipelab.learning.harmonic import locked_series
-from wipelab.learning.kernels import default_width, kernel_activations
-from wipelab.learning.lwr import IncrementalLWR
+from wipelab.learning.afo import AFOParameters
+from wipelab.learning.afs import AFSParameters
+from wipelab.learning.derivatives import MIN_WINDOW, polynomial_fit_matrix
+from wipelab.learning.dmp import max_phase_step
+from wipelab.learning.kernels import default_width, kernel_centres
 from wipelab.learning.model import PeriodicModel
-from wipelab.learning.normalise import PeriodStatistics, RecentSamples, RunningNormaliser
-from wipelab.learning.oscillators import substep_count
-from wipelab.learning.period_detector import PeriodDetector, PeriodDetectorParameters
+from wipelab.learning.normalise import new_period_window, new_running_range
+from wipelab.learning.online_kernel import (AFO, AFS, LWR, POSITIONS, KernelSettings,
+                                           LearnerState, learner_run, learner_step)
+from wipelab.learning.oscillators import DOF_COUPLINGS, substep_count
+from wipelab.learning.period_detector import PeriodDetectorParameters, new_detector
+from wipelab.learning.position_fit import new_position_fit
+from wipelab.learning.tempo import TempoSettings, new_tempo_state
 
 CANONICAL_SYSTEMS = ("afs", "afo")
+REGRESSIONS = ("positions", "lwr")
 
 
 @dataclass(frozen=True)
@@ -120,16 +127,19 @@ class OnlineParameters:
     width: float | None = None              # h of eq. 8; None -> 2.5 N
     alpha_s: float = 12.0                   # eq. 6
     beta_s: float = 3.0                     # eq. 6
-    forgetting: float = 0.99                # lambda of eq. 14
-    forgetting_samples_per_period: float | None = 100.0  # lambda counts per 1/this of a period
-    p0: float = 1.0                         # P_i(0) of eq. 14
-    update_spacing: float | None = 0.5      # LWR updates <= this x 2 pi / N apart (phase); None: 1/sample
+    regression: str = "positions"           # "positions" (limit-cycle fit) or "lwr" (eqs. 13-15)
+    memory_periods: float = 3.0             # positions: the fit's memory (periods)
+    smoothing: float = 1e-2                 # positions: smoothness penalty, as the offline fit's
+    forgetting: float = 0.99                # lwr: lambda of eq. 14
+    forgetting_samples_per_period: float | None = 100.0  # lwr: lambda counts per 1/this of a period
+    p0: float = 1.0                         # lwr: P_i(0) of eq. 14
+    update_spacing: float | None = 0.5      # lwr: updates <= this x 2 pi / N apart (phase); None: 1/sample
+    derivative_window_periods: float = 0.125  # lwr: polynomial window as a fraction of the period
+    derivative_degree: int = 4              # lwr: polynomial degree of the derivative fit
+    max_derivative_window: int = 101        # lwr: samples, odd
     dof_coupling: str = "mean"              # "mean": every moving DOF drives the phase; "reference": one
     substep_hz: float = 500.0               # oscillators integrate at >= this rate (Hz)
     normaliser_time_constant_s: float = 10.0  # tau of the running range used until the lock (s)
-    derivative_window_periods: float = 0.125  # polynomial window as a fraction of the period
-    derivative_degree: int = 4              # polynomial degree of the derivative fit
-    max_derivative_window: int = 101        # samples, odd
     min_frequency_hz: float = 0.1           # longest period the anchor window and detector cover (Hz)
     statistics_periods: int = 1             # periods over which Omega, g and r are averaged
     start_up: bool = True                   # detect the period and hand it to the canonical system
@@ -138,6 +148,11 @@ class OnlineParameters:
     relock_tolerance: float | None = 0.3    # hand over again when the detector's held period and the
                                             # fundamental differ by more (relative); None: once only
     frequency_periods: float = 40.0         # the model's frequency: mean phase rate over this many periods
+    min_frequency_periods: float = 2.0      # ... of the current tempo; fewer: the fundamental
+    change_threshold: float | None = 0.15   # a change of tempo: the per-period frequency off by more
+    change_periods: int = 2                 # ... in this many consecutive periods (None above: never)
+    change_relock_tolerance: float | None = 0.02  # after a change, hand over at this disagreement
+    change_relock_periods: float = 3.0      # ... within this many periods of finding the change
     weights_every_s: float = 0.05           # interval of the weight snapshots in the history (s)
     afs: AFSParameters = field(default_factory=AFSParameters)
     afo: AFOParameters = field(default_factory=AFOParameters)
@@ -145,6 +160,10 @@ class OnlineParameters:
     def __post_init__(self):
         if self.canonical not in CANONICAL_SYSTEMS:
             raise ValueError(f"canonical must be one of {CANONICAL_SYSTEMS}, got {self.canonical!r}")
+        if self.regression not in REGRESSIONS:
+            raise ValueError(f"regression must be one of {REGRESSIONS}, got {self.regression!r}")
+        if self.dof_coupling not in DOF_COUPLINGS:
+            raise ValueError(f"dof_coupling must be one of {DOF_COUPLINGS}, got {self.dof_coupling!r}")
         if self.kernels < 2:
             raise ValueError(f"kernels must be >= 2, got {self.kernels}")
         if self.max_derivative_window < 5 or self.max_derivative_window % 2 == 0:
@@ -153,8 +172,10 @@ class OnlineParameters:
             raise ValueError(f"update_spacing must be > 0 or None, got {self.update_spacing}")
         if self.relock_tolerance is not None and not self.relock_tolerance > 0.0:
             raise ValueError(f"relock_tolerance must be > 0 or None, got {self.relock_tolerance}")
-        if not self.frequency_periods > 0.0:
-            raise ValueError(f"frequency_periods must be > 0, got {self.frequency_periods}")
+        if not self.frequency_periods > 0.0 or not self.memory_periods > 0.0:
+            raise ValueError("frequency_periods and memory_periods must be > 0")
+        if self.change_periods < 1:
+            raise ValueError(f"change_periods must be >= 1, got {self.change_periods}")
 
     @property
     def kernel_width(self) -> float:
@@ -179,6 +200,8 @@ class LearnHistory:
         Canonical phase (rad, unwrapped).
     fundamental_hz : ndarray, shape (n,)
         Selected fundamental Omega / 2 pi (Hz).
+    frequency_hz : ndarray, shape (n,)
+        The model's frequency as it would be saved at that sample (Hz).
     oscillators_hz : ndarray, shape (n, M)
         Every oscillator's frequency (Hz): M = 3 for the AFO pool (Fig. 4), 1 for the AFS.
     weights_t : ndarray, shape (k,)
@@ -197,6 +220,7 @@ class LearnHistory:
     output: np.ndarray
     phase: np.ndarray
     fundamental_hz: np.ndarray
+    frequency_hz: np.ndarray
     oscillators_hz: np.ndarray
     weights_t: np.ndarray
     weights: np.ndarray
@@ -208,8 +232,76 @@ def _wrap(angle: float) -> float:
     return float(np.mod(angle, 2.0 * math.pi))
 
 
+def kernel_settings(n_dofs: int, dt: float, params: OnlineParameters,
+                    reference_dof: int) -> KernelSettings:
+    """The compiled step's settings for d DOFs sampled every dt (s)."""
+    p = params
+    canonical = p.afs if p.canonical == "afs" else p.afo
+    detector, _ = new_detector(n_dofs, dt, p.detector, p.min_frequency_hz,
+                               canonical.max_frequency_hz)
+    w = p.max_derivative_window
+    fit_matrices = np.zeros(((w - MIN_WINDOW) // 2 + 1, p.derivative_degree + 1, w))
+    for index, length in enumerate(range(MIN_WINDOW, w + 1, 2)):
+        matrix = polynomial_fit_matrix(length, p.derivative_degree)
+        fit_matrices[index, :matrix.shape[0], :length] = matrix
+    width = p.kernel_width
+    return KernelSettings(
+        canonical=AFS if p.canonical == "afs" else AFO, gains=canonical.gains(),
+        reference=int(reference_dof), mean_coupling=p.dof_coupling == "mean",
+        n_sub=substep_count(dt, p.substep_hz), dt=float(dt),
+        offset=0.0 if p.canonical == "afs" else 1.0,
+        normaliser_rate=dt / p.normaliser_time_constant_s,
+        statistics_periods=float(p.statistics_periods),
+        floor_omega=2.0 * math.pi * p.min_frequency_hz, start_up=p.start_up, detector=detector,
+        confirm=p.detector.confirm, n_terms=p.afs.n_terms if p.canonical == "afs" else 3,
+        lock_search=p.lock_search, relock_tolerance=p.relock_tolerance or 0.0,
+        change_relock_tolerance=p.change_relock_tolerance or 0.0,
+        change_relock_periods=p.change_relock_periods,
+        tempo=TempoSettings(window_periods=p.frequency_periods,
+                            min_periods=p.min_frequency_periods,
+                            change_threshold=math.inf if p.change_threshold is None
+                            else p.change_threshold,
+                            change_periods=p.change_periods, reference_periods=2),
+        regression=POSITIONS if p.regression == "positions" else LWR,
+        memory_periods=p.memory_periods, forgetting=p.forgetting,
+        forgetting_samples_per_period=p.forgetting_samples_per_period or 0.0,
+        update_spacing=p.update_spacing or 0.0, window_periods=p.derivative_window_periods,
+        fit_matrices=fit_matrices, centres=kernel_centres(p.kernels), width=width,
+        alpha_s=p.alpha_s, beta_s=p.beta_s, max_phase_step=max_phase_step(width))
+
+
+def new_learner_state(n_dofs: int, dt: float, params: OnlineParameters,
+                      settings: KernelSettings) -> LearnerState:
+    """A learner that has seen nothing."""
+    p = params
+    canonical = p.afs if p.canonical == "afs" else p.afo
+    oscillators = canonical.new_state(n_dofs)
+    _, detector = new_detector(n_dofs, dt, p.detector, p.min_frequency_hz,
+                               canonical.max_frequency_hz)
+    capacity = anchor_capacity(dt, params)
+    w = p.max_derivative_window
+    one = lambda dtype=np.float64: np.zeros(1, dtype=dtype)   # noqa: E731
+    return LearnerState(
+        output=np.zeros(n_dofs), velocity=np.zeros(n_dofs), phase=one(), omega=one(),
+        frequency_hz=one(), weights=np.zeros((n_dofs, p.kernels)), goal=np.zeros(n_dofs),
+        amplitude=np.ones(n_dofs), hand_overs=one(np.int64), count=one(np.int64),
+        valid_run=one(np.int64), locked=one(np.int64), relock_until=one(),
+        moving=np.zeros(n_dofs, dtype=np.bool_), previous_u=np.zeros(n_dofs),
+        oscillators=oscillators, range=new_running_range(n_dofs),
+        statistics=new_period_window(n_dofs, capacity),
+        fundamental=new_period_window(1, capacity), detector=detector,
+        recent=np.zeros((recent_capacity(dt, p) if p.start_up else 1, n_dofs)),
+        recent_count=one(np.int64), tempo=new_tempo_state(settings.tempo),
+        fit=new_position_fit(n_dofs, p.kernels, p.kernel_width, p.alpha_s, p.beta_s, p.smoothing),
+        lwr_P=np.full((n_dofs, p.kernels), float(p.p0)), values=np.zeros((w, n_dofs)),
+        value_phases=np.zeros(w), value_omegas=np.zeros(w),
+        scratch=np.zeros((8, max(n_dofs, oscillators.alpha.shape[1], 3))))
+
+
 class OnlineLearner:
-    """Reference implementation of the online two-layer learner for d DOFs sampled every dt.
+    """The online two-layer learner for d DOFs sampled every dt: one sample at a time
+    (:meth:`step`, what a live session calls at the camera rate) or many (:meth:`process`),
+    through the same compiled step (:func:`~wipelab.learning.online_kernel.learner_step`).
 
     Parameters
     ----------
@@ -220,192 +312,128 @@ class OnlineLearner:
     reference_dof : int
         The DOF whose fundamental defines phase 0 (a cosine peak).
 
-    Attributes
-    ----------
-    locked_ : bool
-        Whether the detected period has been handed to the canonical system.
-    hand_overs_ : int
-        How often it has been (the start-up, then re-locks).
-    omega_ : float
-        The fundamental Omega (rad/s): the oscillator's frequency averaged over the last period.
-    goal_, amplitude_ : ndarray, shape (d,)
-        g and r over the last period (m).
+    The state after the last sample is read through the properties (copies are cheap to
+    avoid: ``output``, ``weights``, ``goal`` and ``amplitude`` are the learner's own arrays,
+    changed in place by the next sample).
     """
 
     def __init__(self, n_dofs: int, dt: float, params: OnlineParameters = OnlineParameters(),
                  reference_dof: int = 0):
+        if not 0 <= reference_dof < n_dofs:
+            raise ValueError(f"reference_dof must be in [0, {n_dofs}), got {reference_dof}")
         self.params = params
-        self.dt = dt
-        self.n_sub = substep_count(dt, params.substep_hz)
-        width = params.kernel_width
-        if params.canonical == "afs":
-            self.canonical = AdaptiveFourierSeries(n_dofs, params.afs, reference_dof, params.dof_coupling)
-            offset = 0.0
-        else:
-            self.canonical = AdaptiveOscillatorPool(n_dofs, params.afo, reference_dof, params.dof_coupling)
-            offset = 1.0
-        self.offset = offset
-        self.reference_dof = reference_dof
-        self.normaliser = RunningNormaliser(n_dofs, dt, params.normaliser_time_constant_s, offset)
-        self.detector = PeriodDetector(n_dofs, dt, params.detector, params.min_frequency_hz,
-                                       self.canonical.params.max_frequency_hz) \
-            if params.start_up else None
-        self.recent = RecentSamples(n_dofs, recent_capacity(dt, params)) if params.start_up else None
-        self.locked_ = False
-        capacity = anchor_capacity(dt, params)
-        self.statistics = PeriodStatistics(n_dofs, dt, capacity, params.statistics_periods)
-        # The fundamental is the oscillator's Omega averaged over the last period: free of
-        # the ripple the coupling term puts on the instantaneous value.
-        self.frequency_statistics = PeriodStatistics(1, dt, capacity, params.statistics_periods)
-        self.derivatives = CentredDerivatives(n_dofs, dt, params.derivative_window_periods,
-                                              params.derivative_degree, params.max_derivative_window)
-        self.lwr = IncrementalLWR(params.kernels, n_dofs, params.forgetting, params.p0)
-        self.dmp = PeriodicDMP(self.lwr.weights_, np.zeros(n_dofs), np.ones(n_dofs), width,
-                               params.alpha_s, params.beta_s)
-        self.goal_ = np.zeros(n_dofs)
-        self.amplitude_ = np.ones(n_dofs)
-        self._moving = np.zeros(n_dofs, dtype=bool)
-        self.count_ = 0
-        self.hand_overs_ = 0
-        self._valid_run = 0
-        self._previous_input = np.zeros(n_dofs)
-        self._previous_phase = 0.0
-        self._previous_omega = 0.0
-        self.omega_ = 0.0
+        self.dt = float(dt)
+        self.n_dofs = n_dofs
+        self.settings = kernel_settings(n_dofs, dt, params, reference_dof)
+        self.state = new_learner_state(n_dofs, dt, params, self.settings)
 
-    def _normalised(self, y: np.ndarray) -> np.ndarray:
-        """u = (y - g) / r + offset over the last period once locked (0 for a still DOF)."""
-        return np.where(self._moving, (y - self.goal_) / self.amplitude_, 0.0) + self.offset
+    def step(self, y, valid: bool = True) -> np.ndarray:
+        """Learn from one sample y (d,) in m (a placeholder when not ``valid``: the input was
+        not observed; it teaches nothing, the canonical system runs on at its frequency);
+        return the learned movement at the same time (d,), m (the learner's own array)."""
+        learner_step(self.settings, self.state, np.ascontiguousarray(y, dtype=np.float64),
+                     bool(valid))
+        return self.state.output
 
-    def _update_statistics(self, y: np.ndarray, omega: float) -> None:
-        self.goal_, amplitude = self.statistics.update(y, omega)
-        self._moving = amplitude > 0.0
-        self.amplitude_ = np.where(self._moving, amplitude, 1.0)
+    def process(self, Y, valid=None, every: int = 1) -> dict:
+        """Learn from Y (n, d) (rows not ``valid`` are gaps); return the per-sample state.
 
-    def _lock(self, y: np.ndarray) -> np.ndarray:
-        """Hand the detected period to the canonical system with the series of the recent input."""
-        p = self.params
-        omega = 2.0 * math.pi / self.detector.period_s_
-        self._update_statistics(y, omega)
-        count = min(self.recent.count_, int(round((1.0 + p.detector.confirm)
-                                                   * self.detector.period_s_ / self.dt)))
-        window = self._normalised(self.recent.last(count))
-        n_terms = p.afs.n_terms if p.canonical == "afs" else 3
-        omega, phase, alpha, beta = locked_series(window, self.dt, omega, n_terms,
-                                                  self.reference_dof, p.lock_search)
-        # An Euler substep compares the input at its end with the series at its start phase, so
-        # a settled oscillator leads the input's phase by one substep.
-        self.canonical.lock(omega, phase + omega * self.dt / self.n_sub, alpha, beta, self.dt)
-        self.frequency_statistics.restart()
-        self.locked_ = True
-        self.hand_overs_ += 1
-        return window[-1]
-
-    def _needs_hand_over(self) -> bool:
-        """Whether the period the detector holds should be handed to the canonical system: at
-        the start-up, and when the fundamental has strayed from it (a subharmonic, a lost lock)."""
-        if not self.locked_:
-            return True
-        tolerance = self.params.relock_tolerance
-        return tolerance is not None and \
-            abs(self.omega_ * self.detector.period_s_ / (2.0 * math.pi) - 1.0) > tolerance
-
-    def _observe(self, y: np.ndarray) -> None:
-        """Steps 1-2 for an observed sample: detector and hand-over, or the canonical system."""
-        if self.detector is not None:
-            self.recent.push(y)
-            detected = self.detector.update(y)
-            if detected and self._needs_hand_over():
-                self._previous_input = self._lock(y)
-                return
-        self._update_statistics(y, self.canonical.fundamental[1])
-        u = self._normalised(y) if self.locked_ else self.normaliser.update(y)
-        if self._valid_run == 1:                      # the first sample, or the first after a gap
-            self._previous_input = u
-        self.canonical.advance(self._previous_input, u, self.dt, self.n_sub)
-        self._previous_input = u
-
-    def _skip(self) -> None:
-        """Steps 1-2 for a gap: the canonical system runs on at its frequency, learning nothing;
-        the detector restarts (its lags need contiguous samples)."""
-        if self.detector is not None and self._valid_run > 0:
-            self.detector.restart()
-            self.recent.restart()
-        self.canonical.free_run(self.dt)
-
-    def step(self, y: np.ndarray, valid: bool = True) -> np.ndarray:
-        """Process one sample y (d,) in m; return the DMP output (d,) at the same time.
-
-        An invalid sample (``valid`` False: the input was not observed, y is only a
-        placeholder) teaches nothing: the canonical system runs on at its frequency, and no
-        regression update uses a window that holds it.
+        Returns
+        -------
+        dict of ndarray
+            ``output`` (n, d), ``phase`` (n,), ``fundamental_hz`` (n,), ``frequency_hz``
+            (n,), ``oscillators_hz`` (n, M), ``hand_overs`` (n,) and ``weights`` (k, d, N),
+            a snapshot at every sample whose index since the first ever is a multiple of
+            ``every``.
         """
-        p = self.params
-        y = np.asarray(y, dtype=np.float64)
-        if self.count_ == 0:
-            self.dmp.reset(y, np.zeros_like(y))
-        if valid:
-            self._valid_run += 1
-            self._observe(y)
-        else:
-            self._skip()
-            self._valid_run = 0
-        phase, omega_now = self.canonical.fundamental
-        mean_omega, _ = self.frequency_statistics.update(np.array([omega_now]), omega_now)
-        omega = self.omega_ = max(float(mean_omega[0]), 2.0 * math.pi * p.min_frequency_hz)
-        self.derivatives.push(y, phase, omega, valid)
-        points = update_points(p, omega * self.dt)
-        estimates = self.derivatives.between(omega, points)
-        if estimates is not None:
-            y_x, yd_x, ydd_x, phases_x, omega_c = estimates
-            forgetting = forgetting_factor(p, omega_c * self.dt / points)
-            for yc, ydc, yddc, phase_c in zip(y_x, yd_x, ydd_x, phases_x):
-                f_target = forcing_target(yc, ydc, yddc, omega_c, self.goal_, p.alpha_s, p.beta_s)
-                psi = kernel_activations(phase_c, p.kernels, p.kernel_width)
-                # f_targ ~ w r, regressed in units of r: the prior P0 = 1 then weighs the same
-                # for any scale of the movement (with r in metres it would outweigh seconds of data).
-                self.lwr.update(psi, np.ones_like(self.amplitude_), f_target / self.amplitude_,
-                                forgetting)
-        self.dmp.goal, self.dmp.amplitude = self.goal_, self.amplitude_
-        if self.count_ > 0:
-            self.dmp.step(self._previous_phase, self._previous_omega, self.dt)
-        self._previous_phase, self._previous_omega = phase, omega
-        self.count_ += 1
-        return self.dmp.y_.copy()
+        Y = np.ascontiguousarray(Y, dtype=np.float64)
+        n = Y.shape[0]
+        valid = np.ones(n, dtype=np.bool_) if valid is None else \
+            np.ascontiguousarray(valid, dtype=np.bool_)
+        count = self.count
+        snapshots = np.empty(((count + n - 1) // every - (count - 1) // every if count
+                              else (n - 1) // every + 1, self.n_dofs, self.params.kernels))
+        result = {"output": np.empty((n, self.n_dofs)), "phase": np.empty(n),
+                  "fundamental_hz": np.empty(n), "frequency_hz": np.empty(n),
+                  "oscillators_hz": np.empty((n, self.state.oscillators.omegas.size)),
+                  "hand_overs": np.empty(n, dtype=np.int64)}
+        written = learner_run(self.settings, self.state, Y, valid, result["output"],
+                              result["phase"], result["fundamental_hz"], result["frequency_hz"],
+                              result["oscillators_hz"], result["hand_overs"], snapshots,
+                              int(every))
+        result["weights"] = snapshots[:written]
+        return result
 
     @property
-    def weights_(self) -> np.ndarray:
-        """Current weights, shape (d, N)."""
-        return self.lwr.weights_
+    def count(self) -> int:
+        """Samples processed."""
+        return int(self.state.count[0])
 
+    @property
+    def output(self) -> np.ndarray:
+        """The DMP's position, the movement learned so far (d,), m."""
+        return self.state.output
 
-def forgetting_factor(params: OnlineParameters, phase_step: float) -> float:
-    """lambda for one sample that advances the phase by ``phase_step`` (rad).
+    @property
+    def phase(self) -> float:
+        """Canonical phase phi (rad, unwrapped)."""
+        return float(self.state.phase[0])
 
-    Eq. 14 forgets per sample, so its memory in periods shrinks with the sample rate: at
-    500 Hz and 0.3 Hz, lambda = 0.99 remembers 0.06 periods, shorter than a kernel's pass,
-    and each weight is biased towards the latest samples (a phase lag). Counted per
-    1/``forgetting_samples_per_period`` of a period instead, the paper's lambda keeps the
-    memory it has at 100 samples per period at every rate and frequency.
-    """
-    if params.forgetting_samples_per_period is None:
-        return params.forgetting
-    return params.forgetting ** (phase_step * params.forgetting_samples_per_period / (2.0 * math.pi))
+    @property
+    def omega(self) -> float:
+        """The fundamental Omega (rad/s): the oscillator's frequency averaged over the last
+        period, what the DMP integrates with."""
+        return float(self.state.omega[0])
 
+    @property
+    def fundamental_hz(self) -> float:
+        return self.omega / (2.0 * math.pi)
 
-def update_points(params: OnlineParameters, phase_step: float) -> int:
-    """Regression updates per sample that advances the phase by ``phase_step`` (rad).
+    @property
+    def frequency_hz(self) -> float:
+        """The model's frequency now (Hz), see :mod:`wipelab.learning.tempo`."""
+        return float(self.state.frequency_hz[0])
 
-    One per sample as printed, or enough that consecutive update phases are at most
-    ``update_spacing`` kernel spacings (2 pi / N) apart: the learner knows the phase between
-    samples, and the local polynomial of :class:`CentredDerivatives` gives position,
-    velocity and acceleration there. Every update discounts the past by the forgetting factor
-    of its own phase step, so the memory in periods does not change.
-    """
-    if params.update_spacing is None:
-        return 1
-    spacing = params.update_spacing * 2.0 * math.pi / params.kernels
-    return max(1, int(math.ceil(phase_step / spacing - 1e-9)))
+    @property
+    def oscillators_hz(self) -> np.ndarray:
+        """Every oscillator's |omega_i| / 2 pi (Hz), shape (M,)."""
+        return np.abs(self.state.oscillators.omegas) / (2.0 * math.pi)
+
+    @property
+    def weights(self) -> np.ndarray:
+        """Current weights (d, N)."""
+        return self.state.weights
+
+    @property
+    def goal(self) -> np.ndarray:
+        """g over the last period (d,), m."""
+        return self.state.goal
+
+    @property
+    def amplitude(self) -> np.ndarray:
+        """r over the last period (d,), m."""
+        return self.state.amplitude
+
+    @property
+    def locked(self) -> bool:
+        """Whether a detected period has been handed to the canonical system."""
+        return bool(self.state.locked[0])
+
+    @property
+    def hand_overs(self) -> int:
+        """How often it has been (the start-up, then re-locks)."""
+        return int(self.state.hand_overs[0])
+
+    @property
+    def tempo_changes(self) -> int:
+        """Changes of tempo found so far."""
+        return int(self.state.tempo.changes[0])
+
+    def model(self, dofs, source: dict, t_last: float) -> PeriodicModel:
+        """The model learned so far; ``t_last`` (s) is the time of the last sample on the
+        clock of the model's phase_offset."""
+        return build_model(dofs, self.params, self.frequency_hz, self.phase, t_last,
+                           self.weights, self.goal, self.amplitude, source)
 
 
 def anchor_capacity(dt: float, params: OnlineParameters) -> int:
@@ -431,34 +459,11 @@ def build_model(dofs, params: OnlineParameters, frequency_hz: float, phase: floa
         phase_offset=_wrap(phase - omega * t_last), source=source)
 
 
-def model_frequency_hz(t: np.ndarray, phase: np.ndarray, fundamental_hz: np.ndarray,
-                       hand_overs: np.ndarray, periods: float) -> float:
-    """The frequency a learned model keeps (Hz): the canonical phase's mean rate over the last
-    ``periods`` periods since the last hand-over.
-
-    A person's tempo wanders by several percent from stroke to stroke, and the canonical
-    system follows it: the fundamental at the end of a demonstration is the tempo of its last
-    strokes (up to 8 % from the mean on the synthetic demos of ``benchmarks/bench_track.py``),
-    while the phase advance over many periods gives the demonstrated frequency. With fewer
-    than two periods since the hand-over (or none), the fundamental averaged over the last
-    period.
-    """
-    n = t.size
-    dt = float((t[-1] - t[0]) / (n - 1))
-    start = int(np.searchsorted(hand_overs, hand_overs[-1])) if hand_overs[-1] > 0 else n - 1
-    start = max(start, n - 1 - int(round(periods / (fundamental_hz[-1] * dt))))
-    if hand_overs[-1] > 0 and (t[-1] - t[start]) * fundamental_hz[-1] >= 2.0:
-        return float((phase[-1] - phase[start]) / (2.0 * math.pi * (t[-1] - t[start])))
-    last_period = max(1, int(round(1.0 / (fundamental_hz[-1] * dt))))
-    return float(fundamental_hz[-last_period:].mean())
-
-
 def learn_online(t: np.ndarray, Y: np.ndarray, params: OnlineParameters = OnlineParameters(),
                  dofs=None, reference_dof: int = 0, source: dict | None = None,
-                 progress: Callable[[int], None] | None = None, reference: bool = False,
-                 chunk: int = 2048, valid: np.ndarray | None = None
-                 ) -> tuple[PeriodicModel, LearnHistory]:
-    """Learn a periodic model online, sample by sample.
+                 progress: Callable[[int], None] | None = None, chunk: int = 2048,
+                 valid: np.ndarray | None = None) -> tuple[PeriodicModel, LearnHistory]:
+    """Learn a periodic model online, sample by sample (:class:`OnlineLearner`).
 
     Parameters
     ----------
@@ -475,62 +480,38 @@ def learn_online(t: np.ndarray, Y: np.ndarray, params: OnlineParameters = Online
         Provenance stored in the model.
     progress : callable, optional
         Called with the number of samples processed after each chunk.
-    reference : bool
-        Run the numpy reference implementation instead of the numba kernel (slow; for tests).
     chunk : int
-        Samples per call of the kernel (granularity of ``progress``).
+        Samples per call of the compiled loop (granularity of ``progress``).
     valid : ndarray of bool, shape (n,), optional
         Which samples were observed (default: all); see :meth:`OnlineLearner.step`.
 
     Returns
     -------
     model : PeriodicModel
-        The final weights, the frequency of :func:`model_frequency_hz`, g and r over the last
-        period, and the phase extrapolated back to t = 0.
+        The final weights, the model frequency (:mod:`wipelab.learning.tempo`), g and r over
+        the last period, and the phase extrapolated back to t = 0.
     history : LearnHistory
     """
-    if not reference:
-        from wipelab.learning._online_kernel import FastOnlineLearner
-
     t = np.asarray(t, dtype=np.float64)
     Y = np.asarray(Y, dtype=np.float64)
     n, d = Y.shape
     valid = np.ones(n, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
     dt = float((t[-1] - t[0]) / (n - 1))
     dofs = tuple(dofs) if dofs is not None else tuple(f"q{j}" for j in range(d))
-    learner = OnlineLearner(d, dt, params, reference_dof) if reference else \
-        FastOnlineLearner(d, dt, params, reference_dof)
+    learner = OnlineLearner(d, dt, params, reference_dof)
     every = max(1, int(round(params.weights_every_s / dt)))
-    output = np.empty((n, d))
-    phase = np.empty(n)
-    fundamental = np.empty(n)
-    hand_overs = np.empty(n, dtype=np.int64)
-    n_osc = 3 if params.canonical == "afo" else 1
-    oscillators = np.empty((n, n_osc))
-    snapshots = []
+    parts = []
     for start in range(0, n, chunk):
         stop = min(n, start + chunk)
-        if reference:
-            for k in range(start, stop):
-                output[k] = learner.step(Y[k], bool(valid[k]))
-                phase[k] = learner.canonical.fundamental[0]
-                fundamental[k] = learner.omega_ / (2.0 * math.pi)
-                oscillators[k] = learner.canonical.frequencies_hz
-                hand_overs[k] = learner.hand_overs_
-                if k % every == 0:
-                    snapshots.append(learner.weights_.copy())
-        else:
-            snapshots.extend(learner.process(Y[start:stop], valid[start:stop], output[start:stop],
-                                             phase[start:stop], fundamental[start:stop],
-                                             oscillators[start:stop], hand_overs[start:stop],
-                                             every))
+        parts.append(learner.process(Y[start:stop], valid[start:stop], every))
         if progress is not None:
             progress(stop - start)
-    frequency_hz = model_frequency_hz(t, phase, fundamental, hand_overs, params.frequency_periods)
-    model = build_model(dofs, params, frequency_hz, phase[-1], t[-1], learner.weights_,
-                        learner.goal_, learner.amplitude_, source or {})
-    history = LearnHistory(t=t, input=Y, output=output, phase=phase, fundamental_hz=fundamental,
-                           oscillators_hz=oscillators, weights_t=t[::every],
-                           weights=np.array(snapshots).reshape(-1, d, params.kernels),
-                           valid=valid, hand_overs=hand_overs)
+    joined = {key: np.concatenate([part[key] for part in parts]) for key in parts[0]}
+    model = learner.model(dofs, source or {}, t[-1])
+    history = LearnHistory(t=t, input=Y, output=joined["output"], phase=joined["phase"],
+                           fundamental_hz=joined["fundamental_hz"],
+                           frequency_hz=joined["frequency_hz"],
+                           oscillators_hz=joined["oscillators_hz"], weights_t=t[::every],
+                           weights=joined["weights"].reshape(-1, d, params.kernels),
+                           valid=valid, hand_overs=joined["hand_overs"])
     return model, history

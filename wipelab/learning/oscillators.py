@@ -40,8 +40,12 @@ gain, and so the convergence, does not depend on how many DOFs move.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
+from numba import njit
+
+from wipelab.numba_cache import forget_stale_kernels
 
 #: Normalised amplitude below which a non-reference DOF's phase drive is faded out.
 R_FADE = 0.1
@@ -52,52 +56,122 @@ DOF_COUPLINGS = ("mean", "reference")
 REFERENCE_OMEGA = 2.0 * math.pi
 
 
+class OscillatorGains(NamedTuple):
+    """The gains of a canonical system in the units the compiled substeps take (rad/s)."""
+
+    coupling: float               # K (1/s), at 1 Hz when scaled
+    frequency_coupling: float     # K_Omega (1/s^2), at 1 Hz when scaled
+    learning_rate: float          # nu or eta (1/s), at 1 Hz when scaled
+    scale_with_frequency: bool    # gains x (Omega / 2 pi), K_Omega x (Omega / 2 pi)^2
+    min_omega: float              # AFS: Omega is kept >= this (rad/s)
+    max_omega: float              # |Omega| is kept <= this (rad/s)
+    locked_coupling: float        # c_L of the gain schedule after a lock
+    residual_gain: float          # kappa of the gain schedule
+    residual_periods: float       # E is low-passed over this many periods
+    zero_omega: float             # AFO pool: |omega| below this counts as 0 Hz (rad/s)
+    reset_dwell_s: float          # AFO pool: two oscillators at 0 Hz this long reset it (s)
+
+
+class OscillatorState(NamedTuple):
+    """The state of a canonical system (M oscillators: 1 for the AFS, 3 for the pool).
+
+    Attributes
+    ----------
+    phases, omegas : ndarray, shape (M,)
+        phi_i (rad, unwrapped) and omega_i (rad/s; a pool oscillator may run backwards).
+    alpha, beta : ndarray, shape (d, C)
+        Cosine and sine coefficients per DOF (AFS: C = M_terms + 1 harmonics of phi; pool:
+        C = 3, one per oscillator), normalised input units.
+    initial_omegas : ndarray, shape (M,)
+        omega_i(0), where a reset of the pool returns them (rad/s).
+    residual, locked, zero_time, resets : ndarray, shape (1,)
+        E of the gain schedule; 1 once a detected period was handed over (0 after a reset);
+        time two pool oscillators have sat at 0 Hz (s); resets of the pool so far.
+    """
+
+    phases: np.ndarray
+    omegas: np.ndarray
+    alpha: np.ndarray
+    beta: np.ndarray
+    initial_omegas: np.ndarray
+    residual: np.ndarray
+    locked: np.ndarray
+    zero_time: np.ndarray
+    resets: np.ndarray
+
+
+def new_oscillator_state(n_dofs: int, initial_omegas, n_coefficients: int) -> OscillatorState:
+    """A canonical system at rest: phases 0, omega_i(0), no series."""
+    initial = np.array(initial_omegas, dtype=np.float64)
+    return OscillatorState(phases=np.zeros(initial.size), omegas=initial.copy(),
+                           alpha=np.zeros((n_dofs, n_coefficients)),
+                           beta=np.zeros((n_dofs, n_coefficients)), initial_omegas=initial,
+                           residual=np.zeros(1), locked=np.zeros(1), zero_time=np.zeros(1),
+                           resets=np.zeros(1))
+
+
+@njit(cache=True)
+def locked_boost(state: OscillatorState, gains: OscillatorGains, error, omega: float,
+                 h: float) -> float:
+    """The factor on K and K_Omega for one substep: c_L + kappa E once locked (E updated
+    with this substep's error), 1 before."""
+    if state.locked[0] == 0.0:
+        return 1.0
+    state.residual[0] = residual_step(state.residual[0], error, omega, h, gains.residual_periods)
+    return gains.locked_coupling + gains.residual_gain * state.residual[0]
+
+
+@njit(cache=True)
 def gain_scale(omega: float, scale_with_frequency: bool) -> float:
     """m = |Omega| / (2 pi rad/s) when gains scale with the frequency, else 1."""
     return abs(omega) / REFERENCE_OMEGA if scale_with_frequency else 1.0
 
 
-def phase_drive(error: np.ndarray, phase, alpha1: np.ndarray, beta1: np.ndarray, reference: int,
-                mean_coupling: bool) -> np.ndarray:
-    """The coupling term of eqs. 1-2 for several DOFs: K times this is subtracted from phi' and omega'.
+@njit(cache=True)
+def phase_drive(error, sin_phi: float, cos_phi: float, alpha, beta, column: int, reference: int,
+                mean_coupling: bool) -> float:
+    """The coupling term of eqs. 1-2 for several DOFs: K times this is subtracted from phi'
+    and K_Omega times it from Omega'.
 
     Parameters
     ----------
     error : ndarray, shape (d,)
-        e_j = y_j - y_hat_j of eq. 3 per DOF (normalised units).
-    phase : float or ndarray, shape (m,)
-        Oscillator phase(s) phi (rad).
-    alpha1, beta1 : ndarray, shape (d,) or (m, d)
-        Each DOF's cosine and sine coefficients at the oscillator(s).
+        e_j = u_j - y_hat_j of eq. 3 per DOF (normalised units).
+    sin_phi, cos_phi : float
+        sin and cos of the oscillator's phase phi.
+    alpha, beta : ndarray, shape (d, C)
+        Cosine and sine coefficients; column ``column`` is the oscillator's.
+    column : int
+        The oscillator's column (AFS: 1, the fundamental; AFO pool: its index).
     reference : int
         Index of the reference DOF.
     mean_coupling : bool
         Whether the other DOFs contribute (``"mean"``) or only the reference (``"reference"``).
-
-    Returns
-    -------
-    float or ndarray, shape (m,)
     """
-    phase = np.asarray(phase, dtype=np.float64)
-    sin_phi, cos_phi = np.sin(phase)[..., None], np.cos(phase)[..., None]
-    drive = error[reference] * np.sin(phase)
+    total = error[reference] * sin_phi
+    weight = 1.0
     if mean_coupling:
-        amplitude = np.hypot(alpha1, beta1)
-        others = np.ones(error.shape[0], dtype=bool)
-        others[reference] = False
-        terms = error * (alpha1 * sin_phi - beta1 * cos_phi) / (amplitude + R_FADE)
-        drive = (drive + (terms * others).sum(axis=-1)) \
-            / (1.0 + (amplitude / (amplitude + R_FADE) * others).sum(axis=-1))
-    return drive
+        for j in range(error.shape[0]):
+            if j != reference:
+                a, b = alpha[j, column], beta[j, column]
+                amplitude = math.hypot(a, b)
+                total += error[j] * (a * sin_phi - b * cos_phi) / (amplitude + R_FADE)
+                weight += amplitude / (amplitude + R_FADE)
+    return total / weight
 
 
-def residual_step(residual: float, error: np.ndarray, omega: float, h: float, periods: float) -> float:
+@njit(cache=True)
+def residual_step(residual: float, error, omega: float, h: float, periods: float) -> float:
     """E, the mean squared error e_j^2 over the DOFs low-passed over ``periods`` periods of
     Omega, one substep of h seconds later (normalised units)."""
+    squares = 0.0
+    for j in range(error.shape[0]):
+        squares += error[j] * error[j]
     rate = min(h * abs(omega) / (2.0 * math.pi * periods), 1.0)
-    return residual + rate * (float(np.mean(error ** 2)) - residual)
+    return residual + rate * (squares / error.shape[0] - residual)
 
 
+@njit(cache=True)
 def nearest_turn(angle: float) -> float:
     """angle wrapped to [-pi, pi) (rad): the smallest change of phase to reach a target angle."""
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
@@ -105,10 +179,7 @@ def nearest_turn(angle: float) -> float:
 
 def substep_count(dt: float, substep_hz: float) -> int:
     """Euler substeps per sample so that the oscillators integrate at >= substep_hz."""
-    return max(1, int(np.ceil(dt * substep_hz - 1e-9)))
+    return max(1, int(math.ceil(dt * substep_hz - 1e-9)))
 
 
-def interpolated_inputs(previous: np.ndarray, current: np.ndarray, n_sub: int) -> np.ndarray:
-    """Inputs at the end of each substep, linear between two samples; shape (n_sub, d)."""
-    fractions = np.arange(1, n_sub + 1)[:, None] / n_sub
-    return previous + fractions * (current - previous)
+forget_stale_kernels(__name__)

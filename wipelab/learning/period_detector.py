@@ -36,16 +36,20 @@ learner's ``relock_tolerance``, the learner hands over again (see
 :mod:`wipelab.learning.online`). A gap in the input (samples marked invalid) restarts it:
 the lags compare samples a fixed time apart, which a gap would break.
 
-The per-block functions are plain loops: the numba kernel of the online learner compiles
-these very functions.
+All of it is compiled (:func:`detector_update` on a :class:`DetectorState`): the online
+learner's kernel calls it per sample.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
+from numba import njit
+
+from wipelab.numba_cache import forget_stale_kernels
 
 
 @dataclass(frozen=True)
@@ -106,6 +110,7 @@ def compared_pairs(max_lag: int, confirm: float) -> np.ndarray:
     return np.maximum(1, np.ceil(confirm * np.arange(max_lag + 1) - 1e-9)).astype(np.int64)
 
 
+@njit(cache=True)
 def add_block(blocks: np.ndarray, sums: np.ndarray, pairs: np.ndarray, n_blocks: int,
               block: np.ndarray) -> None:
     """Slide every lag's window by the new block average and store it (in place).
@@ -139,6 +144,7 @@ def add_block(blocks: np.ndarray, sums: np.ndarray, pairs: np.ndarray, n_blocks:
         sums[tau] += total
 
 
+@njit(cache=True)
 def first_period_lag(sums: np.ndarray, pairs: np.ndarray, n_blocks: int, min_lag: int,
                      threshold: float) -> float:
     """The period in blocks (fractional) from the difference sums; 0 while none is found.
@@ -182,6 +188,7 @@ def first_period_lag(sums: np.ndarray, pairs: np.ndarray, n_blocks: int, min_lag
     return tau + (0.5 * (before - after) / curvature if curvature > 0.0 else 0.0)
 
 
+@njit(cache=True)
 def stable_lag(lag: float, candidate: float, since: int, n_blocks: int, stable_periods: float,
                tolerance: float) -> tuple[float, int, bool]:
     """Track the estimate until it holds: returns (candidate, since, hand over now).
@@ -204,65 +211,87 @@ def stable_lag(lag: float, candidate: float, since: int, n_blocks: int, stable_p
     return candidate, since, n_blocks - since >= stable_periods * lag
 
 
-class PeriodDetector:
-    """Online start-up period detector for d DOFs sampled every dt (reference implementation).
+class DetectorSettings(NamedTuple):
+    """The detector's parameters and layout in the units :func:`detector_update` takes."""
 
-    Parameters
-    ----------
-    n_dofs : int
-    dt : float
-        Sample interval (s).
-    params : PeriodDetectorParameters
-    min_frequency_hz, max_frequency_hz : float
-        Range of fundamentals searched (Hz).
+    threshold: float
+    stable_periods: float
+    tolerance: float
+    decimation: int           # samples per block
+    min_lag: int              # blocks
+    block_s: float            # seconds per block
 
-    Attributes
-    ----------
-    period_s_ : float or None
-        The latest estimate that held (s); None until one has, and again after a restart.
-    """
 
-    def __init__(self, n_dofs: int, dt: float, params: PeriodDetectorParameters,
-                 min_frequency_hz: float, max_frequency_hz: float):
-        self.params = params
-        self.layout = DetectorLayout.for_rate(dt, params, min_frequency_hz, max_frequency_hz)
-        self.block_s = dt * self.layout.decimation
-        self.pairs = compared_pairs(self.layout.max_lag, params.confirm)
-        self.blocks_ = np.zeros((self.layout.capacity, n_dofs))
-        self.sums_ = np.zeros(self.layout.max_lag + 1)
-        self._accumulated = np.zeros(n_dofs)
-        self.restart()
+class DetectorState(NamedTuple):
+    """The detector's memory (see :func:`add_block` for the arrays)."""
 
-    def restart(self) -> None:
-        """Forget every sample (after a gap in the input)."""
-        self.blocks_[:] = 0.0
-        self.sums_[:] = 0.0
-        self._accumulated[:] = 0.0
-        self.n_blocks_ = 0
-        self._in_block = 0
-        self._candidate = 0.0
-        self._since = 0
-        self.period_s_: float | None = None
+    blocks: np.ndarray        # (capacity, d) block averages (m)
+    sums: np.ndarray          # (max_lag + 1,) difference sums (m^2)
+    pairs: np.ndarray         # (max_lag + 1,) int64, W(tau)
+    accumulated: np.ndarray   # (d,) sum of the samples of the block being filled
+    n_blocks: np.ndarray      # (1,) int64, blocks so far
+    in_block: np.ndarray      # (1,) int64, samples in the block being filled
+    candidate: np.ndarray     # (1,) the estimate being watched (blocks; 0: none)
+    since: np.ndarray         # (1,) int64, block count when it was first seen
+    period_s: np.ndarray      # (1,) the latest estimate that held (s; 0: none since the restart)
 
-    def update(self, y: np.ndarray) -> bool:
-        """Absorb a sample y (d,) in m; True when it completes a block whose estimate has held
-        (``period_s_`` is then that estimate)."""
-        self._accumulated += y
-        self._in_block += 1
-        if self._in_block < self.layout.decimation:
-            return False
-        block = self._accumulated / self._in_block
-        self._accumulated[:] = 0.0
-        self._in_block = 0
-        add_block(self.blocks_, self.sums_, self.pairs, self.n_blocks_, block)
-        self.n_blocks_ += 1
-        p = self.params
-        lag = first_period_lag(self.sums_, self.pairs, self.n_blocks_, self.layout.min_lag,
-                               p.threshold)
-        self._candidate, self._since, stable = stable_lag(lag, self._candidate, self._since,
-                                                          self.n_blocks_, p.stable_periods,
-                                                          p.tolerance)
-        if not stable:
-            return False
-        self.period_s_ = lag * self.block_s
-        return True
+
+def new_detector(n_dofs: int, dt: float, params: PeriodDetectorParameters,
+                 min_frequency_hz: float, max_frequency_hz: float
+                 ) -> tuple[DetectorSettings, DetectorState]:
+    """Settings and an empty state for d DOFs sampled every dt (s), fundamentals searched in
+    [min, max] (Hz)."""
+    layout = DetectorLayout.for_rate(dt, params, min_frequency_hz, max_frequency_hz)
+    settings = DetectorSettings(threshold=params.threshold, stable_periods=params.stable_periods,
+                                tolerance=params.tolerance, decimation=layout.decimation,
+                                min_lag=layout.min_lag, block_s=dt * layout.decimation)
+    state = DetectorState(blocks=np.zeros((layout.capacity, n_dofs)),
+                          sums=np.zeros(layout.max_lag + 1),
+                          pairs=compared_pairs(layout.max_lag, params.confirm),
+                          accumulated=np.zeros(n_dofs), n_blocks=np.zeros(1, dtype=np.int64),
+                          in_block=np.zeros(1, dtype=np.int64), candidate=np.zeros(1),
+                          since=np.zeros(1, dtype=np.int64), period_s=np.zeros(1))
+    return settings, state
+
+
+@njit(cache=True)
+def detector_restart(state: DetectorState) -> None:
+    """Forget every sample (after a gap in the input)."""
+    state.blocks[:] = 0.0
+    state.sums[:] = 0.0
+    state.accumulated[:] = 0.0
+    state.n_blocks[0] = 0
+    state.in_block[0] = 0
+    state.candidate[0] = 0.0
+    state.since[0] = 0
+    state.period_s[0] = 0.0
+
+
+@njit(cache=True)
+def detector_update(settings: DetectorSettings, state: DetectorState, y) -> float:
+    """Absorb a sample y (d,) in m; return the period (s) when the sample completes a block
+    whose estimate has held (also kept in ``state.period_s``), else 0."""
+    for j in range(y.shape[0]):
+        state.accumulated[j] += y[j]
+    state.in_block[0] += 1
+    if state.in_block[0] < settings.decimation:
+        return 0.0
+    block = state.accumulated / state.in_block[0]
+    state.accumulated[:] = 0.0
+    state.in_block[0] = 0
+    n_blocks = state.n_blocks[0]
+    add_block(state.blocks, state.sums, state.pairs, n_blocks, block)
+    state.n_blocks[0] = n_blocks + 1
+    lag = first_period_lag(state.sums, state.pairs, n_blocks + 1, settings.min_lag,
+                           settings.threshold)
+    candidate, since, stable = stable_lag(lag, state.candidate[0], state.since[0], n_blocks + 1,
+                                          settings.stable_periods, settings.tolerance)
+    state.candidate[0] = candidate
+    state.since[0] = since
+    if not stable:
+        return 0.0
+    state.period_s[0] = lag * settings.block_s
+    return state.period_s[0]
+
+
+forget_stale_kernels(__name__)

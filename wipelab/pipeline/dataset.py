@@ -28,6 +28,7 @@ from pathlib import Path
 from wipelab.errors import InputError
 from wipelab.pipeline.metrics import demo_metrics, is_key_metric, run_metrics
 from wipelab.pipeline.spec import Pipeline
+from wipelab.stage_output import staged_file
 
 #: Files that mark a directory as a demonstration (DESIGN.md, "Demo directory").
 DEMO_FILES = ("left.mp4", "right.mp4", "calibration.yaml")
@@ -195,20 +196,14 @@ def summary_rows(results: Sequence[DemoResult]) -> tuple[list[str], list[dict[st
 
 
 def write_summary_csv(path: str | os.PathLike, results: Sequence[DemoResult]) -> None:
-    """Write the summary table, every metric, as CSV (atomically: temporary name, rename)."""
+    """Write the summary table, every metric, as CSV (all or nothing, see staged_file)."""
     header, rows = summary_rows(results)
     text = io.StringIO()
     writer = csv.DictWriter(text, fieldnames=header, lineterminator="\n")
     writer.writeheader()
     writer.writerows(rows)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.partial-{os.getpid()}")
-    try:
+    with staged_file(path) as tmp:
         tmp.write_text(text.getvalue())
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 def format_summary(results: Sequence[DemoResult]) -> str:

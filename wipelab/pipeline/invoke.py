@@ -77,11 +77,14 @@ def check_arguments(stage: StageSpec, command: click.Command, source: str) -> No
     InputError
         Naming the pipeline file, the stage and the problem.
     """
+    from wipelab.cli.options import output_checks_deferred
+
     argv = build_argv(stage, command, "INPUT", stage.name, False, source)
     try:
-        command.make_context(f"wipelab {command.name}", argv)
+        with output_checks_deferred():
+            command.make_context(f"wipelab {command.name}", argv)
     except click.ClickException as error:
-        raise InputError(f"{source}: stage {stage.name}: {error.format_message()}") from None
+        raise InputError(f"{source}: stage {stage.name}: {_message(error)}") from None
 
 
 def run_command(command: click.Command, argv: Sequence[str], stage_name: str,
@@ -107,9 +110,15 @@ def run_command(command: click.Command, argv: Sequence[str], stage_name: str,
             raise KeyboardInterrupt from None
         raise
     except click.ClickException as error:
-        raise InputError(f"{source}: stage {stage_name}: {error.format_message()}") from None
+        raise InputError(f"{source}: stage {stage_name}: {_message(error)}") from None
     if isinstance(code, int) and code != 0:
         raise RuntimeError(f"stage {stage_name}: wipelab {command.name} exited with code {code}")
+
+
+def _message(error: click.ClickException) -> str:
+    from wipelab.cli.usage_errors import usage_message
+
+    return usage_message(error) if isinstance(error, click.UsageError) else error.format_message()
 
 
 def _option_named(options: list[click.Option], key: str) -> click.Option | None:

@@ -8,13 +8,13 @@ objects are joined with dots (``adapt.force.rms_error_n``); only finite numbers 
 from __future__ import annotations
 
 import fnmatch
-import json
 import math
-import tomllib
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from wipelab.errors import InputError
+from wipelab.input_files import read_input_json, read_input_toml
 from wipelab.pipeline.cache import read_record
 
 #: Per-stage files whose numbers are collected, and the keys taken from each
@@ -42,8 +42,8 @@ def synthetic_frequency_hz(demo_dir: str | Path) -> float | None:
     """The wiping frequency a synthetic demo was rendered at (``[synth] frequency_hz`` of its
     demo.toml), or None for a recorded demo (or an unreadable demo.toml)."""
     try:
-        synth = tomllib.loads((Path(demo_dir) / "demo.toml").read_text()).get("synth", {})
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        synth = read_input_toml(Path(demo_dir) / "demo.toml").get("synth", {})
+    except InputError:
         return None
     value = synth.get("frequency_hz") if isinstance(synth, dict) else None
     return float(value) if isinstance(value, (int, float)) else None
@@ -73,9 +73,10 @@ def run_metrics(run_dir: str | Path) -> dict[str, float]:
             path = stage_dir / file_name
             if not path.is_file():
                 continue
-            data = json.loads(path.read_text())
+            data = read_input_json(path)
             if keys is not None:
-                data = {key: data[key] for key in keys if key in data}
+                data = {key: data[key] for key in keys if key in data} \
+                    if isinstance(data, dict) else {}
             metrics.update(flatten_numbers(data, prefix=stage_dir.name))
     return dict(sorted(metrics.items()))
 

@@ -23,12 +23,13 @@ import os
 import shutil
 import signal
 import subprocess
-import sys
 from collections.abc import Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
 from wipelab.errors import InputError
+from wipelab.input_files import check_readable
+from wipelab.stage_output import staged_file
 
 
 def find_recordings(path: str | os.PathLike) -> list[Path]:
@@ -55,9 +56,20 @@ def find_recordings(path: str | os.PathLike) -> list[Path]:
 
 
 def rerun_program() -> str:
-    """Path of the ``rerun`` executable (beside this Python's, or on PATH)."""
-    beside = Path(sys.executable).with_name("rerun")
-    program = str(beside) if beside.exists() else shutil.which("rerun")
+    """Path of the Rerun executable: the binary the rerun-sdk wheel ships (what its ``rerun``
+    script runs; started directly, it needs no Python and is the viewer's own process), else
+    ``rerun`` on PATH."""
+    try:
+        import rerun_cli
+    except ImportError:
+        rerun_cli = None
+    if rerun_cli is not None:
+        folder = Path(rerun_cli.__file__).parent
+        for binary in (folder / "Rerun.app" / "Contents" / "MacOS" / "Rerun", folder / "rerun",
+                       folder / "rerun.exe"):
+            if binary.is_file():
+                return str(binary)
+    program = shutil.which("rerun")
     if program is None:
         raise InputError("rerun: program not found (it comes with `pip install rerun-sdk`)")
     return program
@@ -105,26 +117,36 @@ def _stop_group(process: subprocess.Popen) -> None:
 
 def save_recordings(recordings: Sequence[Path], out: str | os.PathLike) -> Path:
     """Write ``recordings`` (their recordings and layouts, each kept apart) into one ``.rrd``
-    at ``out``, through a temporary name that is removed if anything fails or is stopped.
+    at ``out``, all or nothing (:func:`~wipelab.stage_output.staged_file`).
 
     Raises
     ------
     InputError
-        A recording cannot be read.
+        A recording cannot be read or merged.
     """
-    out = Path(out)
-    tmp = out.with_name(f".{out.name}.partial-{os.getpid()}")
-    try:
+    for path in recordings:
+        _check_recording(path)
+    with staged_file(out) as tmp:
         completed = subprocess.run([rerun_program(), "rrd", "merge", *map(str, recordings),
                                     "-o", str(tmp)], capture_output=True, text=True)
         if completed.returncode != 0 or not tmp.is_file():
             lines = [line for line in completed.stderr.splitlines() if line.strip()]
             raise InputError(f"{', '.join(map(str, recordings))}: cannot be merged "
                              f"({lines[-1].strip() if lines else 'rerun rrd merge failed'})")
-        os.replace(tmp, out)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return out
+    return Path(out)
+
+
+def _check_recording(path: Path) -> None:
+    """Read every chunk of the recording at ``path``; InputError naming it if it cannot be
+    (missing, unreadable, not an .rrd, cut short)."""
+    from rerun.chunk import RrdReader
+
+    try:
+        reader = RrdReader(check_readable(path))
+        for store in reader.recordings() + reader.blueprints():
+            reader.stream(store=store).flat_map(lambda chunk: []).to_chunks()
+    except (RuntimeError, ValueError) as error:
+        raise InputError(f"{path}: not a readable Rerun recording ({error})") from None
 
 
 def has_display(environ: dict[str, str] | os._Environ = os.environ) -> bool:

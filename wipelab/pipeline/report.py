@@ -8,7 +8,6 @@ at several frequencies), so a run with several adapt stages gets one figure per 
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from collections.abc import Callable
@@ -18,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from wipelab.errors import InputError
+from wipelab.input_files import read_input_json, reading
 from wipelab.pipeline.cache import StageRecord, read_record
 from wipelab.pipeline.metrics import is_key_metric, run_metrics
 from wipelab.pipeline.spec import REPORT_DIR
@@ -66,7 +66,8 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike | None =
         for stage_dir, record in stages:
             draw = STAGE_FIGURES.get(record.command)
             if draw is not None:
-                figures += draw(stage_dir, tmp)
+                with reading(stage_dir, f"does not hold what {record.command} writes"):
+                    figures += draw(stage_dir, tmp)
         (tmp / "summary.md").write_text(summary_markdown(run_dir, stages, figures))
     return out_dir
 
@@ -100,7 +101,8 @@ def _save(figure, path: Path) -> None:
 def _scalars(mcap: Path, topic: str) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     from wipelab.logs.reader import read_mcap_scalars
 
-    t, values, names = read_mcap_scalars(mcap, topic)
+    with reading(mcap, "not a readable log of wipelab"):
+        t, values, names = read_mcap_scalars(mcap, topic)
     return t, {name: values[:, j] for j, name in enumerate(names)}
 
 
@@ -108,7 +110,8 @@ def _messages(mcap: Path, topic: str) -> list[tuple[float, dict]]:
     """(time s, message) of every message on ``topic``."""
     from wipelab.logs.reader import read_mcap_topic
 
-    return [(ns / 1e9, message) for ns, message in read_mcap_topic(mcap, topic)]
+    with reading(mcap, "not a readable log of wipelab"):
+        return [(ns / 1e9, message) for ns, message in read_mcap_topic(mcap, topic)]
 
 
 def _segments(mcap: Path, command: str) -> list[tuple[float, str]]:
@@ -118,9 +121,7 @@ def _segments(mcap: Path, command: str) -> list[tuple[float, str]]:
 
 
 def _metrics(stage_dir: Path) -> dict:
-    from wipelab.input_files import read_input_text
-
-    return json.loads(read_input_text(stage_dir / "metrics.json"))
+    return read_input_json(stage_dir / "metrics.json")
 
 
 def _height_force_figure(stage_dir: Path, command: str, metrics: dict, title: str):
@@ -182,7 +183,7 @@ def _learn_figures(stage_dir: Path, out: Path) -> list[ReportFigure]:
     from wipelab.pipeline.figures import frequency_figure, waveform_figure
 
     mcap = stage_dir / "learn.mcap"
-    model = json.loads((stage_dir / "model.json").read_text())
+    model = read_input_json(stage_dir / "model.json")
     dofs = model["dofs"]
     t, oscillators = _scalars(mcap, "/oscillators/frequency_hz")
     _, fundamental = _scalars(mcap, "/oscillators/fundamental_hz")
@@ -206,10 +207,11 @@ def _learn_figures(stage_dir: Path, out: Path) -> list[ReportFigure]:
 
 def _observed(mcap: Path, t: np.ndarray) -> np.ndarray:
     """The samples the learner saw (/input/valid; every one in recordings from before it)."""
-    try:
-        return _scalars(mcap, "/input/valid")[1]["valid"] > 0.5
-    except KeyError:
+    from wipelab.logs.reader import mcap_topics
+
+    if "/input/valid" not in mcap_topics(mcap):
         return np.ones(t.size, dtype=bool)
+    return _scalars(mcap, "/input/valid")[1]["valid"] > 0.5
 
 
 def _demo_dir(run_dir: Path) -> Path | None:

@@ -12,7 +12,12 @@ relative to it (``track/track.csv``), so two runs in different places write the 
 
 Interruption: a stage's files appear only when it succeeds (``staged_output``) and its
 record only after that, so Ctrl-C or a kill leaves the stages before it intact and no
-half-written file under a final name; the next run reuses them and reruns the rest.
+half-written file under a final name; the next run reuses them, reruns the rest and
+removes the temporary folders a killed stage left behind.
+
+Everything that can be checked before a stage runs (the run directory as an output
+location, the pipeline's inputs, file parameters and every stage's options) is checked
+before the run directory is created or locked, so a bad run leaves nothing behind.
 """
 
 from __future__ import annotations
@@ -29,9 +34,12 @@ from pathlib import Path
 
 import wipelab
 from wipelab.errors import InputError
+from wipelab.input_files import reading
+from wipelab.output_location import check_output_dir
 from wipelab.pipeline.cache import (DigestMemo, StageRecord, code_files_in_use, package_root,
                                     read_record, remove_record, stage_key, write_record)
 from wipelab.pipeline.spec import Pipeline, StageSpec, file_parameter
+from wipelab.stage_output import remove_stale_partials
 
 LOCK_NAME = ".wipelab-run.lock"
 
@@ -83,13 +91,13 @@ def run_pipeline(pipeline: Pipeline, run_dir: str | os.PathLike, *, quiet: bool 
         directory in use by another run.
     """
     say = (lambda line: None) if quiet else echo
-    run_dir = Path(run_dir).resolve()
+    run_dir = check_output_dir(run_dir).resolve()
+    memo = DigestMemo()
+    _check_before_running(pipeline, run_dir, memo)
     outcomes = []
     with _locked(run_dir), _working_directory(run_dir):
-        _remove_leftovers(run_dir)
-        memo = DigestMemo()
+        remove_stale_partials(run_dir)
         total = len(pipeline.stages)
-        checked = False
         for index, stage in enumerate(pipeline.stages, 1):
             input_arg, input_digest = _stage_input(pipeline, stage, run_dir, memo)
             key = stage_key(stage.name, stage.command, wipelab.__version__,
@@ -101,9 +109,6 @@ def run_pipeline(pipeline: Pipeline, run_dir: str | os.PathLike, *, quiet: bool 
                 say(f"[{index}/{total}] reused {stage.name} (cache hit)")
                 outcomes.append(StageOutcome(stage.name, stage.command, True, record.seconds))
                 continue
-            if not checked:  # the options of this and every later stage, before any runs
-                _check_options(pipeline, pipeline.stages[index - 1:])
-                checked = True
             say(f"[{index}/{total}] running {stage.name} ({_why(record, key, memo)})")
             seconds = _execute(pipeline, stage, input_arg, stage_dir, quiet)
             root = package_root()
@@ -121,6 +126,19 @@ def run_pipeline(pipeline: Pipeline, run_dir: str | os.PathLike, *, quiet: bool 
     return outcomes
 
 
+def _check_before_running(pipeline: Pipeline, run_dir: Path, memo: DigestMemo) -> None:
+    """Raise InputError for anything wrong that shows before a stage runs: an input from
+    outside the run that is missing, a file parameter that is missing, an option a stage's
+    command does not have or a value it cannot parse. Nothing is created before this."""
+    from wipelab.pipeline.invoke import check_arguments, stage_command
+
+    for stage in pipeline.stages:
+        if pipeline.upstream(stage) is None:
+            _stage_input(pipeline, stage, run_dir, memo)
+        _keyed_parameters(pipeline, stage, memo)
+        check_arguments(stage, stage_command(stage.command), pipeline.source)
+
+
 def _stage_input(pipeline: Pipeline, stage: StageSpec, run_dir: Path,
                  memo: DigestMemo) -> tuple[str | None, str | None]:
     """The input argument (relative inside the run directory) and its content hash."""
@@ -131,7 +149,8 @@ def _stage_input(pipeline: Pipeline, stage: StageSpec, run_dir: Path,
         raise InputError(f"{pipeline.source}: stage {stage.name}: input {stage.input!r} "
                          f"({path}) not found")
     argument = path.relative_to(run_dir).as_posix() if path.is_relative_to(run_dir) else str(path)
-    return argument, memo.content(path)
+    with reading(path, "cannot be read"):
+        return argument, memo.content(path)
 
 
 def _keyed_parameters(pipeline: Pipeline, stage: StageSpec, memo: DigestMemo) -> dict:
@@ -144,19 +163,12 @@ def _keyed_parameters(pipeline: Pipeline, stage: StageSpec, memo: DigestMemo) ->
         elif not path.is_file():
             raise InputError(f"{pipeline.source}: stage {stage.name}: {key}: {path} not found")
         else:  # a surface TOML names its heightfield beside it: the folder is the content
-            keyed[key] = {"file": path.name, "sha256": memo.file(path),
-                          "beside": {p.name: memo.file(p) for p in sorted(path.parent.iterdir())
-                                     if p.is_file() and not p.name.startswith(".")}}
+            with reading(path, "cannot be read"):
+                keyed[key] = {"file": path.name, "sha256": memo.file(path),
+                              "beside": {p.name: memo.file(p)
+                                         for p in sorted(path.parent.iterdir())
+                                         if p.is_file() and not p.name.startswith(".")}}
     return keyed
-
-
-def _check_options(pipeline: Pipeline, stages: tuple[StageSpec, ...]) -> None:
-    """Raise InputError for an option a stage's command does not have or a value it cannot
-    parse, before any stage runs."""
-    from wipelab.pipeline.invoke import check_arguments, stage_command
-
-    for stage in stages:
-        check_arguments(stage, stage_command(stage.command), pipeline.source)
 
 
 def _execute(pipeline: Pipeline, stage: StageSpec, input_arg: str | None, stage_dir: Path,
@@ -167,9 +179,11 @@ def _execute(pipeline: Pipeline, stage: StageSpec, input_arg: str | None, stage_
     command = stage_command(stage.command)
     output = stage.name if stage.output is None else f"{stage.name}/{stage.output}"
     argv = build_argv(stage, command, input_arg, output, quiet, pipeline.source)
-    if stage_dir.exists():
+    if stage_dir.is_dir() and not stage_dir.is_symlink():
         remove_record(stage_dir)
         shutil.rmtree(stage_dir)
+    elif stage_dir.exists() or stage_dir.is_symlink():  # not ours: a stage folder goes here
+        stage_dir.unlink()
     if stage.output is not None:
         stage_dir.mkdir()
     start = time.perf_counter()
@@ -185,12 +199,6 @@ def _why(record: StageRecord | None, key: str, memo: DigestMemo) -> str:
     if not record.code_intact(memo):
         return "code changed"
     return "cached outputs missing or modified"
-
-
-def _remove_leftovers(run_dir: Path) -> None:
-    """Delete temporary folders that a killed stage left behind (``.<stage>.partial-*``)."""
-    for leftover in run_dir.glob(".*.partial-*"):
-        shutil.rmtree(leftover, ignore_errors=True)
 
 
 @contextmanager

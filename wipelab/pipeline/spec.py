@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from wipelab.errors import InputError
-from wipelab.input_files import read_input_text
+from wipelab.input_files import read_input_toml
 
 @dataclass(frozen=True)
 class CommandSignature:
@@ -222,11 +222,7 @@ def load_pipeline(path: str | os.PathLike) -> Pipeline:
     """
     path = Path(path)
     source = str(path)
-    text = read_input_text(path)
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
-        raise InputError(f"{source}: not valid TOML ({error})") from None
+    data = read_input_toml(path)
     unknown = sorted(set(data) - {"pipeline", "inputs", "stages"})
     if unknown:
         raise InputError(f"{source}: unknown table(s) {', '.join(unknown)} "

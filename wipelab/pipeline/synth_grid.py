@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from wipelab.errors import InputError
+from wipelab.output_location import check_output_dir
 
 
 @dataclass(frozen=True)
@@ -60,6 +61,16 @@ def render_point(out_dir: str, point: GridPoint, duration: float, fps: int) -> s
     return str(synth(Path(out_dir) / point.name, params, quiet=True))
 
 
+def missing_points(out_dir: str | os.PathLike, points: Sequence[GridPoint]) -> list[GridPoint]:
+    """The points whose demo is not complete yet; InputError when one of their folders
+    cannot be written (checked before any is rendered)."""
+    out_dir = Path(out_dir)
+    todo = [p for p in points if not (out_dir / p.name / "manifest.json").is_file()]
+    for point in todo:
+        check_output_dir(out_dir / point.name)
+    return todo
+
+
 def synth_grid(out_dir: str | os.PathLike, points: Sequence[GridPoint], duration: float,
                fps: int, jobs: int = 1,
                on_done: Callable[[str], None] = lambda path: None) -> list[Path]:
@@ -80,7 +91,9 @@ def synth_grid(out_dir: str | os.PathLike, points: Sequence[GridPoint], duration
         Called with each demo's path when it is rendered (progress).
     """
     out_dir = Path(out_dir)
-    todo = [p for p in points if not (out_dir / p.name / "manifest.json").is_file()]
+    if jobs < 1:
+        raise InputError(f"-j {jobs}: need at least 1 job")
+    todo = missing_points(out_dir, points)
     if jobs <= 1 or len(todo) <= 1:
         for point in todo:
             on_done(render_point(str(out_dir), point, duration, fps))

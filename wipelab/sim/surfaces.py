@@ -30,13 +30,13 @@ from __future__ import annotations
 
 import math
 import os
-import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from wipelab.errors import InputError
+from wipelab.input_files import read_input_npy, read_input_text, read_input_toml, reading
 
 #: Names accepted by ``--surface`` besides a .toml file.
 BUILTIN_SURFACES = ("flat", "bowl", "sink")
@@ -45,6 +45,10 @@ DEFAULT_WIPE_CENTER = (0.58, -0.28)
 #: Table extent used by every built-in (m): x from 0.40 to 1.00, y from -0.70 to 0.30.
 _TABLE_X = (0.40, 1.00)
 _TABLE_Y = (-0.70, 0.30)
+#: Bounds of a user's surface: grid points (a 10 m x 10 m mesh at 5 mm; the simulator builds
+#: two triangles per point) and heights (m, from the origin or the world's z = 0).
+MAX_GRID_POINTS = 4_000_000
+MAX_HEIGHT = 10.0
 
 
 @dataclass(frozen=True)
@@ -177,15 +181,19 @@ def heightfield_surface(name: str, heights, cell: float, origin, wipe_center=Non
                         friction: float = 0.4, source: str = "heights") -> Surface:
     """A user height grid; validated (2-D, at least 2 x 2, finite; cell > 0)."""
     heights = np.asarray(heights)
-    if heights.ndim != 2 or min(heights.shape) < 2:
-        raise InputError(f"{source}: heightfield must be a 2-D array of at least 2 x 2 heights "
-                         f"in metres, got shape {heights.shape}")
-    if not np.issubdtype(heights.dtype, np.number) or not np.all(np.isfinite(heights)):
+    if heights.ndim != 2 or min(heights.shape) < 2 or heights.size > MAX_GRID_POINTS:
+        raise InputError(f"{source}: heightfield must be a 2-D array of 2 x 2 to "
+                         f"{MAX_GRID_POINTS:.0e} heights in metres, got shape {heights.shape}")
+    if (heights.dtype.kind not in "iuf"
+            or not np.all(np.isfinite(heights))):
         raise InputError(f"{source}: heightfield holds non-numeric, NaN or infinite values")
-    if not (isinstance(cell, (int, float)) and cell > 0):
+    if np.abs(heights).max() > MAX_HEIGHT:
+        raise InputError(f"{source}: heightfield holds {np.abs(heights).max():g} m; heights are "
+                         f"metres within +-{MAX_HEIGHT:g}")
+    if not (isinstance(cell, (int, float)) and math.isfinite(cell) and cell > 0):
         raise InputError(f"{source}: cell must be a positive number of metres, got {cell!r}")
     origin = np.asarray(origin, dtype=float)
-    if origin.shape != (3,):
+    if origin.shape != (3,) or not np.all(np.isfinite(origin)):
         raise InputError(f"{source}: origin must be [x, y, z] in metres, got {origin.tolist()}")
     heights = heights.astype(float)
     if wipe_center is None:
@@ -198,24 +206,54 @@ def heightfield_surface(name: str, heights, cell: float, origin, wipe_center=Non
 
 
 def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (n, 3) and triangles (m, 3, int) of a Wavefront OBJ (polygons fanned)."""
+    """Vertices (n, 3) and triangles (m, 3, int) of a Wavefront OBJ (polygons fanned).
+
+    Raises
+    ------
+    InputError
+        Naming the file (and the line): not text, a vertex that is not three finite numbers
+        of metres, a face of fewer than three vertices or one that refers to a vertex the
+        file does not have, no triangles.
+    """
+    text = read_input_text(path)
     vertices, faces = [], []
-    for line in path.read_text().splitlines():
+    for number, line in enumerate(text.splitlines(), 1):
         parts = line.split()
-        if not parts:
+        if not parts or parts[0] not in ("v", "f"):
             continue
-        if parts[0] == "v":
-            vertices.append([float(v) for v in parts[1:4]])
-        elif parts[0] == "f":
-            index = [int(p.split("/")[0]) for p in parts[1:]]
-            index = [i - 1 if i > 0 else len(vertices) + i for i in index]
-            faces += [[index[0], index[k], index[k + 1]] for k in range(1, len(index) - 1)]
-    vertices, faces = np.array(vertices, dtype=float), np.array(faces, dtype=int)
-    if vertices.ndim != 2 or len(vertices) < 3 or faces.ndim != 2 or len(faces) < 1:
+        kind = "vertex" if parts[0] == "v" else "face"
+        with reading(path, f"not a Wavefront OBJ mesh, bad {kind} on line {number}"):
+            if parts[0] == "v":
+                vertices.append(_obj_vertex(parts[1:]))
+            else:
+                faces += _obj_triangles(parts[1:], len(vertices))
+    if len(vertices) < 3 or not faces:
         raise InputError(f"{path}: not a triangle mesh (needs 'v' and 'f' lines)")
+    vertices, faces = np.array(vertices, dtype=float), np.array(faces, dtype=int)
     if faces.min() < 0 or faces.max() >= len(vertices):
-        raise InputError(f"{path}: a face refers to a vertex that does not exist")
+        raise InputError(f"{path}: a face refers to a vertex that does not exist (the file "
+                         f"has {len(vertices)})")
     return vertices, faces
+
+
+def _obj_vertex(values: list[str]) -> list[float]:
+    """x, y, z of a ``v`` line (metres; a fourth value, w, is ignored)."""
+    if len(values) < 3:
+        raise ValueError("a vertex needs x, y and z")
+    vertex = [float(v) for v in values[:3]]
+    if not all(math.isfinite(v) and abs(v) <= MAX_HEIGHT for v in vertex):
+        raise ValueError(f"coordinates are metres within +-{MAX_HEIGHT:g}")
+    return vertex
+
+
+def _obj_triangles(values: list[str], defined: int) -> list[list[int]]:
+    """The triangles (0-based vertex indices) of an ``f`` line, fanned from its first vertex;
+    negative indices count back from the last vertex defined so far."""
+    index = [int(v.split("/")[0]) for v in values]
+    if len(index) < 3:
+        raise ValueError("a face needs at least three vertices")
+    index = [i - 1 if i > 0 else defined + i for i in index]
+    return [[index[0], index[k], index[k + 1]] for k in range(1, len(index) - 1)]
 
 
 def mesh_heights(vertices: np.ndarray, faces: np.ndarray, cell: float
@@ -263,19 +301,15 @@ def _pair(table: dict, key: str, source: str):
     if value is None:
         return None
     if (not isinstance(value, list) or len(value) != 2
-            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
+            or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                       and math.isfinite(v) for v in value)):
         raise InputError(f"{source}: {key} must be [x, y] in metres, got {value!r}")
     return [float(v) for v in value]
 
 
 def _from_toml(path: Path) -> Surface:
     source = str(path)
-    try:
-        table = tomllib.loads(path.read_text())
-    except (OSError, UnicodeDecodeError) as error:
-        raise InputError(f"{source}: cannot be read ({error})") from None
-    except tomllib.TOMLDecodeError as error:
-        raise InputError(f"{source}: not valid TOML ({error})") from None
+    table = read_input_toml(path)
     kind = table.get("type")
     center = _pair(table, "wipe_center", source)
     friction = _number(table, "friction", 0.4, source)
@@ -301,10 +335,7 @@ def _from_toml(path: Path) -> Surface:
     if not data_path.is_file():
         raise InputError(f"{source}: file {table['file']!r} does not exist")
     if kind == "heightfield":
-        try:
-            heights = np.load(data_path, allow_pickle=False)
-        except (OSError, ValueError) as error:
-            raise InputError(f"{data_path}: not a .npy array ({error})") from None
+        heights = read_input_npy(data_path)
         origin = table.get("origin", [0.0, 0.0, 0.0])
         if (not isinstance(origin, list) or len(origin) != 3
                 or not all(isinstance(v, (int, float)) for v in origin)):
@@ -313,6 +344,12 @@ def _from_toml(path: Path) -> Surface:
                                    friction, str(data_path))
     vertices, faces = read_obj(data_path)
     cell = _number(table, "cell", 0.005, source)
+    if cell <= 0:
+        raise InputError(f"{source}: cell must be a positive number of metres, got {cell:g}")
+    span = vertices[:, :2].max(axis=0) - vertices[:, :2].min(axis=0)
+    if np.prod(np.floor(span / cell) + 1) > MAX_GRID_POINTS:
+        raise InputError(f"{data_path}: the mesh spans {span[0]:g} m x {span[1]:g} m, more than "
+                         f"{MAX_GRID_POINTS:.0e} grid points at a cell of {cell:g} m")
     heights, origin = mesh_heights(vertices, faces, cell)
     if np.isnan(heights).mean() > 0.5:
         raise InputError(f"{data_path}: the mesh has no upward-facing surface over most of its "

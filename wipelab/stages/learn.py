@@ -46,7 +46,7 @@ from wipelab.logs.palette import (INPUT_COLOUR, LEARNED_COLOUR, OSCILLATOR_COLOU
 from wipelab.logs.phase_chart import PhaseChart
 from wipelab.manifest import build_manifest, sha256_file, write_json
 from wipelab.model_file import read_model
-from wipelab.stage_output import staged_output
+from wipelab.stage_output import staged_file, staged_output
 from wipelab.trajectory_csv import Trajectory, read_trajectory, write_trajectory
 
 MODES = ("online", "offline")
@@ -59,6 +59,9 @@ PERIOD_SNAPSHOTS = 60
 #: Phases of the logged period, and the fewest demonstrated samples a period is drawn from.
 PERIOD_PHASES = np.linspace(0.0, 2.0 * math.pi, 129)
 MIN_PERIOD_SAMPLES = 8
+#: Most samples on a time grid, of a demonstration or a rollout (a week at 30 Hz, 5.5 h of
+#: 1 kHz motion capture); irregular time stamps or a typo in --periods ask for far more.
+MAX_SAMPLES = 20_000_000
 
 
 @dataclass(frozen=True)
@@ -146,12 +149,23 @@ def _demonstration(path: Path, params: LearnParams) -> tuple[np.ndarray, np.ndar
     if int(trajectory.valid.sum()) < MIN_SAMPLES:
         raise InputError(f"{path}: too short, {int(trajectory.valid.sum())} valid rows, "
                          f"need at least {MIN_SAMPLES}")
+    t_valid = trajectory.t[trajectory.valid]
+    interval = float(np.median(np.diff(trajectory.t)))
+    if (t_valid[-1] - t_valid[0]) / interval >= MAX_SAMPLES:
+        raise InputError(f"{path}: {t_valid[-1] - t_valid[0]:.3g} s at the median sample "
+                         f"interval of {interval:.3g} s are more than {MAX_SAMPLES:.0e} samples "
+                         f"(irregular time stamps?)")
     return to_uniform(trajectory.t, trajectory.array(params.dofs), trajectory.valid)
 
 
 def _check_periodic(path: Path, t: np.ndarray, Y: np.ndarray, valid: np.ndarray,
                     params: LearnParams):
-    estimate = periodicity(t, Y, params.min_frequency_hz, params.max_frequency_hz, valid=valid)
+    try:
+        estimate = periodicity(t, Y, params.min_frequency_hz, params.max_frequency_hz,
+                               valid=valid)
+    except ValueError as error:  # e.g. samples too far apart for any wiping frequency
+        raise InputError(f"{path}: {error} from {t.size} samples {t[1] - t[0]:.3g} s apart")\
+            from None
     if estimate.periods < params.min_periods:
         raise InputError(f"{path}: too short, {estimate.periods:.1f} periods of "
                          f"{estimate.frequency_hz:.3g} Hz, need at least {params.min_periods:g}")
@@ -331,10 +345,14 @@ def rollout(model_path: str | os.PathLike, out_csv: str | os.PathLike, periods: 
     if frequency_hz is not None and not (math.isfinite(frequency_hz) and frequency_hz > 0):
         raise InputError(f"--frequency: must be a positive number, got {frequency_hz}")
     frequency_hz = model.frequency_hz if frequency_hz is None else frequency_hz
+    samples = periods / frequency_hz * rate_hz
+    if not 2 <= samples <= MAX_SAMPLES:
+        raise InputError(f"--periods, --frequency, --rate: {periods:g} periods at "
+                         f"{frequency_hz:g} Hz sampled at {rate_hz:g} Hz make {samples:.3g} "
+                         f"samples; give between 2 and {MAX_SAMPLES:.0e}")
     t, y = model.rollout(periods / frequency_hz, rate_hz, frequency_hz,
                          amplitude=model.amplitude * amplitude_scale,
                          goal=_per_dof("--goal", goal, model))
-    out_csv = Path(out_csv)
-    out_csv.parent.mkdir(parents=True, exist_ok=True)
-    write_trajectory(out_csv, t, {dof: y[:, j] for j, dof in enumerate(model.dofs)})
+    with staged_file(out_csv) as tmp:
+        write_trajectory(tmp, t, {dof: y[:, j] for j, dof in enumerate(model.dofs)})
     return t, y

@@ -160,9 +160,9 @@ def synth(out_dir: str | os.PathLike, params: SynthParams = SynthParams(),
         encoders = [threading.Thread(target=_encode, args=(tmp / name, params.fps,
                                                            layout.image_size, q, errors))
                     for name, q in zip(("left.mp4", "right.mp4"), queues)]
-        for encoder in encoders:
-            encoder.start()
         try:
+            for encoder in encoders:
+                encoder.start()
             for k in tqdm(range(frame_count), desc="synth", unit="frame", disable=quiet,
                           leave=False):
                 if errors:
@@ -170,11 +170,12 @@ def synth(out_dir: str | os.PathLike, params: SynthParams = SynthParams(),
                 for view in range(2):
                     image, visible[k, view] = renderers[view].render(times[k])
                     queues[view].put(effects[view].apply(image, times[k]))
-        finally:
+        finally:  # also on Ctrl-C: an encoder left waiting would keep the program alive
             for q in queues:
                 q.put(None)
             for encoder in encoders:
-                encoder.join()
+                if encoder.ident is not None:
+                    encoder.join()
         if errors:
             raise errors[0]
         save_calibration(tmp / "calibration.yaml", calibration)

@@ -3,13 +3,17 @@
 Reads a demo directory (DESIGN.md: left.mp4, right.mp4, calibration.yaml, optional
 demo.toml), tracks the sponge with :class:`wipelab.vision.tracker.SpongeTracker` and writes
 
-* ``track.csv``: t, x, y, z (sponge-box centre, metres, world frame, or the left camera's
+* ``track.csv``: t, x, y, z (the sponge's point, metres, world frame, or the left camera's
   optical frame when the calibration has no T_world_left), valid (0 while occluded or lost;
-  positions are then empty), yaw (rad, about the table normal), and the normalised offsets
-  ``x_norm``, ``y_norm`` from the centre of the demonstration area (paper Fig. 3);
+  positions are then empty), quality (how the row was measured: ``box`` — the sponge box
+  fitted, its centre; ``centroid`` — the sponge's colour region in both cameras placed on the
+  table's plane; empty when not valid), yaw (rad, about the table normal; box rows only),
+  and the normalised offsets ``x_norm``, ``y_norm`` from the centre of the demonstration
+  area (paper Fig. 3);
 * ``track.mcap`` / ``track.rrd``: both videos (video references), both camera calibrations,
-  /tf of the cameras, the track, the particles, the demonstration area, per-frame quality;
-  in Rerun also the particles and the estimate drawn over both images;
+  /tf of the cameras, the track (x, y, z; the sponge box per frame; the trajectory growing
+  piece by piece), the particles, the demonstration area, the per-frame quality (a state);
+  the sponge box and the particles drawn over both images (``/stereo/*/overlay``);
 * ``manifest.json``.
 
 Everything is checked before anything is written; bad input raises InputError.
@@ -20,7 +24,6 @@ from __future__ import annotations
 import os
 import sys
 import tempfile
-import tomllib
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -31,9 +34,10 @@ import rerun.blueprint as rrb
 from tqdm import tqdm
 
 from wipelab.errors import InputError
+from wipelab.input_files import read_input_toml
 from wipelab.logs import TIMELINE, StageRecorder, stage_panels, whole_run
-from wipelab.logs.timebase import seconds_array_to_ns
 from wipelab.logs.palette import XYZ_COLOURS
+from wipelab.logs.timebase import seconds_array_to_ns
 from wipelab.manifest import build_manifest, write_json
 from wipelab.stage_output import staged_output
 from wipelab.trajectory_csv import write_trajectory
@@ -43,7 +47,9 @@ from wipelab.vision.demonstration_area import DemonstrationArea, measure_demonst
 from wipelab.sim.kinematics import rotation_about_axis
 from wipelab.vision.projection import invert_transform
 from wipelab.vision.sponge_box import EDGES, SpongeBox, yaw_rotation
-from wipelab.vision.tracker import SpongeTracker, TrackerParams
+from wipelab.vision.table_plane import table_axes
+from wipelab.vision.tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_NONE, SpongeTracker,
+                                    TrackerParams)
 from wipelab.vision.video_io import H264Writer, StereoVideoReader
 
 DEFAULT_COLOUR = "yellow"
@@ -68,12 +74,16 @@ class TrackParams:
     seed : int
         Seed of the particle filter.
     sponge_size : tuple of float or None
-        (length, width, height) of the sponge, metres; None: demo.toml's ``sponge_size`` or
-        a kitchen sponge's 0.110 x 0.075 x 0.030.
+        (length, width, height) of the sponge, metres, when known; None: demo.toml's
+        ``sponge_size``, else unknown (the sponge is then tracked by its colour region alone;
+        with a size the box refinement gives its centre).
     area_window : tuple of float
         Time window (start, end), seconds, in which the demonstration area is measured.
     logged_particles : int
         Particles per frame written to the logs.
+    warmup : float
+        Seconds of video read first to find the sponge and measure the table before the
+        tracking pass from the first frame (more when the sponge takes longer to find).
     """
 
     colour: str | None = None
@@ -84,6 +94,7 @@ class TrackParams:
     sponge_size: tuple[float, float, float] | None = None
     area_window: tuple[float, float] = (0.0, 10.0)
     logged_particles: int = 40
+    warmup: float = 6.0
 
 
 @dataclass
@@ -94,27 +105,37 @@ class TrackResult:
     ----------
     t : ndarray, shape (n,)
     poses : ndarray, shape (n, 4)
-        x, y, z (metres) and yaw (rad) in ``frame``; NaN where invalid.
+        x, y, z (metres) and yaw (rad) in ``frame``; NaN where invalid (yaw also in
+        ``centroid`` rows).
     valid : ndarray of bool, shape (n,)
+    quality : ndarray of str, shape (n,)
+        ``box``, ``centroid`` or ``""`` per frame (see the module docstring).
     area : DemonstrationArea
     normalised : ndarray, shape (n, 2)
     frame : str
         ``world`` or ``left_optical``.
-    contrast, coverage : ndarray, shape (n, 2)
-        Per-frame quality in the left and right image.
+    areas : ndarray, shape (n, 2)
+        Pixels of the sponge's colour region in the left and right image (0 where not
+        measured).
     particles : ndarray, shape (n, m, 4)
-        A sample of each frame's particles.
+        A sample of each frame's particles of the box refinement (NaN without it).
+    sponge_size : tuple of float or None
+        (length, width, height) of the sponge box when known, metres.
+    region_size : float
+        Size of the sponge's visible colour region (square root of its area), metres.
     """
 
     t: np.ndarray
     poses: np.ndarray
     valid: np.ndarray
+    quality: np.ndarray
     area: DemonstrationArea
     normalised: np.ndarray
     frame: str
-    contrast: np.ndarray
-    coverage: np.ndarray
+    areas: np.ndarray
     particles: np.ndarray = field(repr=False)
+    sponge_size: tuple[float, float, float] | None = None
+    region_size: float = float("nan")
 
 
 @dataclass(frozen=True)
@@ -151,10 +172,7 @@ def open_demo(demo_dir: str | os.PathLike) -> Demo:
     metadata = {}
     toml_path = demo / "demo.toml"
     if toml_path.is_file():
-        try:
-            metadata = tomllib.loads(toml_path.read_text(encoding="utf-8"))
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-            raise InputError(f"{toml_path}: not valid TOML ({error})") from None
+        metadata = read_input_toml(toml_path)
     return Demo(left, right, calibration_path, calibration, reader, metadata)
 
 
@@ -178,10 +196,10 @@ def _colour_source(params: TrackParams, metadata: dict, toml_name: str) -> Colou
         raise InputError(f"{option}: {error}") from None
 
 
-def _sponge(params: TrackParams, metadata: dict, toml_name: str) -> SpongeBox:
+def _sponge(params: TrackParams, metadata: dict, toml_name: str) -> SpongeBox | None:
     size = params.sponge_size or metadata.get("sponge_size")
     if size is None:
-        return SpongeBox()
+        return None
     option = "--sponge-size" if params.sponge_size else f"{toml_name}: sponge_size"
     try:
         values = [float(v) for v in size]
@@ -215,20 +233,22 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
                                    sponge=_sponge(params, demo.metadata, toml_name))
     tracker = SpongeTracker(demo.calibration, colour, tracker_params)
     result = run_tracker(tracker, demo.reader, params, quiet)
-    if tracker.model is None:
+    if result is None and not tracker.region.frames_with_candidates:
         raise InputError(f"{colour.option}: this colour never shows in both {demo.left} and "
-                         f"{demo.right}")
+                         f"{demo.right}; give the sponge's colour with --color, --hsv or --roi")
     if result is None:
-        raise InputError(f"{demo.left}, {demo.right}: the sponge ({colour.option}) was never "
-                         "seen by both cameras at once")
+        raise InputError(f"{demo.left}, {demo.right}: nothing of this colour ({colour.option}) "
+                         "moves like a wiping sponge in both cameras; give the sponge's colour "
+                         "with --color, --hsv or --roi")
+    sponge = tracker_params.sponge
     parameters = asdict(params) | {"colour_source": colour.option,
-                                   "sponge": asdict(tracker_params.sponge)}
+                                   "sponge": None if sponge is None else asdict(sponge)}
     inputs = {"left_video": demo.left, "right_video": demo.right,
               "calibration": demo.calibration_path}
     scene = TrackScene(demo.calibration, "world" if result.frame == "world" else LEFT_FRAME,
-                       np.eye(3) if tracker.R_track_table is None else tracker.R_track_table,
-                       tracker_params.sponge)
-    blueprint = track_blueprint(scene, result.area, float(np.nanmean(result.poses[result.valid, 2])))
+                       _table_axes(tracker), result.sponge_size, result.region_size)
+    blueprint = track_blueprint(scene, result.area,
+                                float(np.nanmean(result.poses[result.valid, 2])))
     with staged_output(out_dir) as tmp:
         write_trajectory(tmp / "track.csv", result.t, _csv_columns(result))
         with StageRecorder(tmp, "track", parameters, inputs, blueprint,
@@ -241,19 +261,36 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
 
 def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: TrackParams,
                 quiet: bool = False) -> TrackResult | None:
-    """Run ``tracker`` over every frame pair of ``reader``; None if no frame was valid."""
+    """Run ``tracker`` over every frame pair of ``reader``; None if no frame was valid.
+
+    Two passes: a warm-up over the first ``params.warmup`` seconds (longer until the sponge
+    is found and the plane it moves in is known), then, with what it learnt, the tracking
+    pass from the first frame (so that the first seconds are tracked too).
+    """
     n = reader.frame_count
     poses = np.full((n, 4), np.nan)
     valid = np.zeros(n, bool)
-    contrast, coverage = np.zeros((n, 2)), np.zeros((n, 2))
+    quality = np.full(n, QUALITY_NONE, dtype="<U8")
+    areas = np.zeros((n, 2))
     m = params.logged_particles
     particles = np.full((n, m, 4), np.nan)
+    least = int(round(params.warmup * reader.fps))
+    with tqdm(total=n, desc="track: finding the sponge", unit="frame", disable=quiet,
+              file=sys.stderr, leave=False) as bar:
+        for k, (left, right) in enumerate(reader):
+            tracker.step(left, right)
+            bar.update()
+            if k + 1 >= least and tracker.ready:
+                break
+    if not tracker.identified:
+        return None
+    tracker.restart()
     with tqdm(total=n, desc="track", unit="frame", disable=quiet, file=sys.stderr,
               leave=False) as bar:
         for k, (left, right) in enumerate(reader):
             estimate = tracker.step(left, right)
-            poses[k], valid[k] = estimate.pose, estimate.valid
-            contrast[k], coverage[k] = estimate.contrast, estimate.coverage
+            poses[k], valid[k], quality[k] = estimate.pose, estimate.valid, estimate.quality
+            areas[k] = estimate.areas
             if len(estimate.particles):
                 pick = np.linspace(0, len(estimate.particles) - 1, m).astype(int)
                 particles[k] = estimate.particles[pick]
@@ -263,14 +300,18 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
     t = np.arange(n) / reader.fps
     area = measure_demonstration_area(t, poses[:, :2], valid, params.area_window)
     normalised = np.where(valid[:, None], area.normalise(poses[:, :2]), np.nan)
-    return TrackResult(t, poses, valid, area, normalised, tracker.calibration.track_frame,
-                       contrast, coverage, particles)
+    sponge = tracker.params.sponge
+    return TrackResult(t, poses, valid, quality, area, normalised,
+                       tracker.calibration.track_frame, areas, particles,
+                       None if sponge is None else (sponge.length, sponge.width, sponge.height),
+                       float(tracker.region.size))
 
 
 def _csv_columns(result: TrackResult) -> dict[str, np.ndarray]:
     p = result.poses
     return {"x": p[:, 0], "y": p[:, 1], "z": p[:, 2], "valid": result.valid.astype(int),
-            "yaw": p[:, 3], "x_norm": result.normalised[:, 0], "y_norm": result.normalised[:, 1]}
+            "quality": result.quality, "yaw": p[:, 3], "x_norm": result.normalised[:, 0],
+            "y_norm": result.normalised[:, 1]}
 
 
 #: Colours of the logs: sponge box, particles, trajectory, demonstration area.
@@ -278,15 +319,20 @@ SPONGE_COLOUR, PARTICLE_COLOUR = (255, 70, 50), (80, 220, 80)
 TRAJECTORY_COLOUR, AREA_COLOUR = (255, 200, 0), (90, 160, 255)
 #: Length (m) of the camera frustums drawn in the 3D view.
 FRUSTUM_LENGTH = 0.1
-#: Tracking states per frame (``/track/quality``) and their colours.
-QUALITY_COLOURS = {"tracked": (40, 175, 120), "box": (40, 175, 120),
-                   "centroid": (240, 150, 40), "lost": (200, 60, 60)}
+#: How each frame was tracked (``/track/quality``: the quality column, "lost" for empty)
+#: and its colour in the logs.
+LOST = "lost"
+QUALITY_COLOURS = {QUALITY_BOX: (40, 175, 120), QUALITY_CENTROID: (240, 150, 40),
+                   LOST: (200, 60, 60)}
+#: Thickness of the flat box drawn where only the colour region was measured, as a fraction
+#: of the region's size.
+REGION_THICKNESS = 0.15
 
 
 @dataclass(frozen=True)
 class TrackScene:
     """What logging a frame needs: the cameras, the frame tracks are reported in, how the
-    table lies in it, and the sponge box.
+    table lies in it, and the size of what is drawn at the sponge.
 
     Attributes
     ----------
@@ -295,13 +341,18 @@ class TrackScene:
         Frame id of the track frame in the logs: ``world`` or the left camera's optical frame.
     R_track_table : ndarray, shape (3, 3)
         Table axes in the track frame (the sponge's yaw turns about the table normal).
-    sponge : SpongeBox
+    sponge_size : tuple of float or None
+        (length, width, height) of the sponge box, m, when known: drawn on ``box`` frames.
+    region_size : float
+        Size of the sponge's visible colour region, m: a flat square of this size is drawn on
+        ``centroid`` frames (and on box frames when the box size is unknown).
     """
 
     calibration: StereoCalibration
     frame: str
     R_track_table: np.ndarray
-    sponge: SpongeBox
+    sponge_size: tuple[float, float, float] | None
+    region_size: float
 
     @property
     def T_left_track(self) -> np.ndarray:
@@ -313,14 +364,22 @@ class TrackScene:
             self.calibration.right.T_cam_ref)
         return np.stack([self.calibration.T_track_left[:3, 3], T_track_right[:3, 3]])
 
-    def sponge_rotation(self, yaw: float) -> np.ndarray:
-        """Sponge axes (3, 3) in the track frame at ``yaw`` (rad)."""
-        return self.R_track_table @ yaw_rotation(np.asarray(yaw))
+    def box_size(self, quality: str) -> np.ndarray:
+        """Size (3,) m of what is drawn at the sponge on a frame of ``quality``: the sponge
+        box, or a flat square the size of the colour region."""
+        if quality == QUALITY_BOX and self.sponge_size is not None:
+            return np.asarray(self.sponge_size, dtype=float)
+        side = self.region_size if np.isfinite(self.region_size) else 0.1
+        return np.array([side, side, REGION_THICKNESS * side])
 
-    def box_edges_px(self, pose: np.ndarray) -> list[np.ndarray]:
-        """The 12 edges of the sponge box at ``pose`` (x, y, z, yaw) projected into the left
-        and right images: two arrays (12, 2, 2) of pixels (top-left pixel corner = 0)."""
-        corners = pose[:3] + self.sponge.corners() @ self.sponge_rotation(pose[3]).T
+    def sponge_rotation(self, yaw: float) -> np.ndarray:
+        """Sponge axes (3, 3) in the track frame at ``yaw`` (rad; 0 when unknown)."""
+        return self.R_track_table @ yaw_rotation(np.asarray(yaw if np.isfinite(yaw) else 0.0))
+
+    def box_edges_px(self, pose: np.ndarray, size: np.ndarray) -> list[np.ndarray]:
+        """The 12 edges of a box of ``size`` (3,) at ``pose`` (x, y, z, yaw) projected into the
+        left and right images: two arrays (12, 2, 2) of pixels (top-left pixel corner = 0)."""
+        corners = pose[:3] + SpongeBox(*size).corners() @ self.sponge_rotation(pose[3]).T
         return [self._pixels(camera, corners)[EDGES] for camera in self.cameras()]
 
     def particles_px(self, particles: np.ndarray) -> list[np.ndarray]:
@@ -333,6 +392,13 @@ class TrackScene:
     def _pixels(self, camera, points_track: np.ndarray) -> np.ndarray:
         T = self.T_left_track
         return camera.project(points_track @ T[:3, :3].T + T[:3, 3]) + 0.5
+
+
+def _table_axes(tracker: SpongeTracker) -> np.ndarray:
+    """Axes (3, 3) of the table in the track frame, as the tracker measures yaw (identity
+    before the plane the sponge moves in is known)."""
+    plane = tracker.region.sponge_plane()
+    return np.eye(3) if plane is None else table_axes(tracker.T_track_left[:3, :3] @ plane.normal)
 
 
 def track_blueprint(scene: TrackScene, area: DemonstrationArea, height: float) -> rrb.Blueprint:
@@ -425,36 +491,40 @@ def log_track_setup(rec: StageRecorder, scene: TrackScene) -> None:
 
 
 def log_track_frame(rec: StageRecorder, scene: TrackScene, index: int, t: float,
-                    pose: np.ndarray, valid: bool, particles: np.ndarray,
+                    pose: np.ndarray, quality: str, particles: np.ndarray,
                     previous: np.ndarray | None) -> None:
-    """One frame: the sponge box (removed while lost), the particles, the new piece of the
-    trajectory (from ``previous``, the last frame's position if it was tracked) and the box
-    and particles drawn over both images.
+    """One frame: the sponge box (a flat square the size of the colour region where only
+    that was measured; removed while lost), the particles, the new piece of the trajectory
+    (from ``previous``, the last frame's position if it was tracked) and the same drawn over
+    both images.
 
-    ``pose`` (4,) x, y, z (m) and yaw (rad) in the track frame; ``particles`` (m, >= 3) their
-    positions first (NaN rows are skipped).
+    ``pose`` (4,) x, y, z (m) and yaw (rad) in the track frame; ``quality`` ``box``,
+    ``centroid`` or ``""`` (lost); ``particles`` (m, >= 3) their positions first (NaN rows
+    are skipped).
     """
     particles = particles[np.isfinite(particles[:, 0])]
     if len(particles):
         rec.points3d("/track/particles", t, particles[:, :3], colors=PARTICLE_COLOUR,
                      radii=0.0015, frame_id=scene.frame)
-    size = [scene.sponge.length, scene.sponge.width, scene.sponge.height]
+    valid = quality != QUALITY_NONE
+    colour = SPONGE_COLOUR if quality == QUALITY_BOX else QUALITY_COLOURS[QUALITY_CENTROID]
     if valid:
-        rotation = scene.sponge_rotation(pose[3])
-        rec.box3d("/track/sponge", t, size, pose[:3], _quaternion_xyzw(rotation),
-                  color=SPONGE_COLOUR, frame_id=scene.frame)
+        size = scene.box_size(quality)
+        rec.box3d("/track/sponge", t, size, pose[:3],
+                  _quaternion_xyzw(scene.sponge_rotation(pose[3])), color=colour,
+                  frame_id=scene.frame)
         if previous is not None:
             rec.line_strip3d("/track/trajectory", t, np.stack([previous, pose[:3]]),
                              color=TRAJECTORY_COLOUR, frame_id=scene.frame,
                              entity_id=f"/track/trajectory/{index}")
     else:
-        rec.box3d("/track/sponge", t, size, None, frame_id=scene.frame)
-    edges = scene.box_edges_px(pose) if valid else [np.zeros((0, 2, 2))] * 2
+        rec.box3d("/track/sponge", t, np.zeros(3), None, frame_id=scene.frame)
+    edges = scene.box_edges_px(pose, size) if valid else [np.zeros((0, 2, 2))] * 2
     dots = scene.particles_px(particles) if len(particles) else [np.zeros((0, 2))] * 2
     for side, frame_id, lines, points in zip(("left", "right"), (LEFT_FRAME, RIGHT_FRAME),
                                              edges, dots):
         rec.image_overlay(f"/stereo/{side}/overlay", t, frame_id, lines,
-                          points[np.isfinite(points).all(axis=1)], SPONGE_COLOUR, PARTICLE_COLOUR)
+                          points[np.isfinite(points).all(axis=1)], colour, PARTICLE_COLOUR)
 
 
 def log_track(rec: StageRecorder, demo: Demo, result: TrackResult, scene: TrackScene,
@@ -480,13 +550,13 @@ def log_track(rec: StageRecorder, demo: Demo, result: TrackResult, scene: TrackS
             TIMELINE, duration=seconds_array_to_ns(t[lost]).astype("timedelta64[ns]"))],
             columns=rr.Scalars.columns(scalars=np.full((lost.size, 3), np.nan)))
     rec.scalars("/track/valid", t, valid.astype(float))
-    quality = np.where(valid, "tracked", "lost")
+    quality = np.where(result.quality == QUALITY_NONE, LOST, result.quality)
     changes = np.flatnonzero(np.concatenate([[True], quality[1:] != quality[:-1]]))
     rec.states("/track/quality", t[changes], quality[changes].tolist(),
                {q: QUALITY_COLOURS[q] for q in dict.fromkeys(quality.tolist())})
     rec.scalars("/track/normalised", t[valid], result.normalised[valid], names=["x_norm", "y_norm"])
-    rec.scalars("/track/contrast", t, result.contrast, names=["left", "right"])
-    rec.scalars("/track/coverage", t, result.coverage, names=["left", "right"])
+    rec.scalars("/track/region_area_px", t, result.areas, names=["left", "right"])
+    rec.scalars("/track/box_fit", t, (result.quality == QUALITY_BOX).astype(float))
     area = result.area
     rec.json("/track/demonstration_area", 0.0,
              {"lower_left": area.lower_left, "upper_right": area.upper_right,
@@ -501,7 +571,7 @@ def log_track(rec: StageRecorder, demo: Demo, result: TrackResult, scene: TrackS
     previous = None
     for k in tqdm(range(len(t)), desc="logs", unit="frame", disable=quiet, file=sys.stderr,
                   leave=False):
-        log_track_frame(rec, scene, k, float(t[k]), result.poses[k], bool(valid[k]),
+        log_track_frame(rec, scene, k, float(t[k]), result.poses[k], str(result.quality[k]),
                         result.particles[k], previous)
         previous = result.poses[k, :3] if valid[k] else None
 

@@ -19,7 +19,18 @@ Modules (one concept each):
   ``_likelihood_kernel``; the colour blob's moments in ``_moments_kernel``);
 * :mod:`~wipelab.vision.particle_filter`, :mod:`~wipelab.vision.pose_refinement` - the
   filter's building blocks and the Newton refinement;
-* :mod:`~wipelab.vision.tracker` - the tracker (paper Sec. III-A2), occlusion handling;
+* :mod:`~wipelab.vision.colour_regions` - the soft colour prior of a named colour, colour
+  blobs with sub-pixel centroids;
+* :mod:`~wipelab.vision.acquisition` - telling the moving sponge from static things of its
+  colour (stereo pairing, motion, static objects);
+* :mod:`~wipelab.vision.table_plane`, :mod:`~wipelab.vision.table_stereo` - the plane the
+  sponge slides on (dense stereo of the table) and points constrained to it;
+* :mod:`~wipelab.vision.region_tracker` - the sponge's colour region in both cameras,
+  placed on the plane (needs only the sponge's colour);
+* :mod:`~wipelab.vision.box_tracker` - the box refinement: particle filter and Newton fit of
+  a sponge box of known dimensions;
+* :mod:`~wipelab.vision.tracker` - the tracker the track stage runs (paper Sec. III-A2):
+  both of the above, occlusion handling, the per-frame quality;
 * :mod:`~wipelab.vision.demonstration_area` - the demonstration area of Fig. 3;
 * :mod:`~wipelab.vision.camshift_baseline` - CamShift + triangulation, for comparison;
 * :mod:`~wipelab.vision.video_io` - decoding (OpenCV) and H.264 encoding (PyAV);

@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from pathlib import Path
 
 import cv2
 import numpy as np
 
 from wipelab.errors import InputError
+from wipelab.input_files import check_readable
 from wipelab.vision.projection import (SUPPORTED_DISTORTION_LENGTHS, make_transform,
                                        project_points, transform_points)
 
@@ -154,9 +154,7 @@ def load_calibration(path: str | os.PathLike) -> StereoCalibration:
         Naming the file and the problem: not found, not FileStorage, a missing key, a
         matrix of the wrong shape, a non-rotation R, a zero baseline, a bad T_world_left.
     """
-    name = str(path)
-    if not Path(path).is_file():
-        raise InputError(f"{name}: file not found")
+    name = str(check_readable(path))
     try:
         fs = cv2.FileStorage(name, cv2.FILE_STORAGE_READ)
     except (cv2.error, SystemError):  # OpenCV's parser errors surface as either

@@ -1,54 +1,43 @@
-"""The sponge tracker: colour back-projection, a 3D particle filter, sub-millimetre pose
-refinement and occlusion handling, frame by frame on a calibrated stereo pair (paper,
-Sec. III-A2).
+"""The sponge tracker of the track stage (paper, Sec. III-A2: colour segmentation and a
+particle filter on the stereo pair, 30 Hz).
 
-Per frame:
+Two estimators share the work:
 
-1. predict: every particle (x, y, z, yaw) moves with the sponge's motion extrapolated from
-   the last measured poses (constant acceleration, damped) plus random diffusion;
-2. weight: inside a window around the prediction, both frames are back-projected through
-   the colour histogram (:class:`~wipelab.vision.colour_model.ColourModel`); each
-   particle's box is projected into both images, lens distortion included, and scored by
-   its silhouette contrast and face coverage (:mod:`wipelab.vision.sponge_likelihood`);
-   ``w ~ exp(gain * score)``; the estimate is the weighted mean;
-3. refine: Newton ascent of the silhouette contrast of both images read from a *linear*
-   colour feature (:class:`~wipelab.vision.colour_model.LinearColourFeature`), whose blurred
-   edges stay centred on the true outline, gives the pose to a fraction of a millimetre
-   (:mod:`wipelab.vision.pose_refinement`);
-4. decide: the refined box must be seen (coverage) with a clear outline (contrast) in
-   *both* images; otherwise the frame is occluded: it is marked invalid, the particles
-   spread out, and a global colour-blob search in both images (triangulated) re-initialises
-   the filter as soon as the sponge shows again. Valid frames resample the particles.
+* the region tracker (:mod:`wipelab.vision.region_tracker`) always runs: it finds the
+  sponge among everything of its colour (the region that moves, is consistent between the
+  two views and has a sponge's size), learns its colour, measures the table by dense stereo,
+  and places the centroids of the sponge's colour region in both cameras on a plane parallel
+  to the table. It needs nothing about the sponge but its colour (quality ``centroid``);
+* when the sponge's dimensions are known (``demo.toml``, ``--sponge-size``), the box
+  refinement (:mod:`wipelab.vision.box_tracker`: a particle filter over box poses and a
+  Newton fit of the box outline) gives the box centre itself to a fraction of a millimetre
+  (quality ``box``). Whenever it cannot fit (a hand over an edge, blur, a box of other
+  proportions) the region's estimate stands in, shifted by the offset between the two
+  learnt while both held, and the filter is seeded again from it.
 
-The reported point is the centre of the sponge box (not the visible blob's centroid): the
-same point as synth's truth.csv.
+A frame is reported valid only when the estimate that stands is backed by both images; a
+distractor, a stale estimate or a guess during an occlusion is never valid.
 """
 
 from __future__ import annotations
 
-import math
-import statistics
 from collections import deque
 from dataclasses import dataclass, field
 
-import cv2
 import numpy as np
 
-from wipelab.vision._moments_kernel import threshold_moments
+from wipelab.vision.box_tracker import BoxParams, BoxTracker
 from wipelab.vision.calibration import StereoCalibration
-from wipelab.vision.colour_model import (ColourModel, ColourSource, LinearColourFeature,
-                                         largest_blob)
-from wipelab.vision.particle_filter import (align_yaw, normalised_weights,
-                                            systematic_resample, weighted_pose_mean,
-                                            wrap_half_turn)
+from wipelab.vision.colour_model import ColourSource, LinearColourFeature
 from wipelab.vision.projection import invert_transform, transform_points
-from wipelab.vision.sponge_box import CORNER_SIGNS, SpongeBox, yaw_rotation
-from wipelab.vision.sponge_likelihood import (SilhouetteContrast, SpongeTemplate, ViewImage,
-                                              ViewSamples, facing_camera, score_view,
-                                              view_samples)
-from wipelab.vision.stereo_geometry import (closest_point_of_rays, reprojection_errors,
-                                             triangulate_pixels)
-from wipelab.vision.undistortion import Undistorter
+from wipelab.vision.region_tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_NONE,
+                                           RegionTracker, RegionTrackerParams)
+from wipelab.vision.particle_filter import wrap_half_turn
+from wipelab.vision.sponge_box import SpongeBox
+from wipelab.vision.table_plane import table_axes
+
+__all__ = ["TrackerParams", "FrameEstimate", "SpongeTracker", "QUALITY_BOX",
+           "QUALITY_CENTROID", "QUALITY_NONE"]
 
 
 @dataclass(frozen=True)
@@ -58,74 +47,23 @@ class TrackerParams:
     Attributes
     ----------
     particles : int
-        Number of particles.
+        Particles of the box refinement's filter.
     seed : int
         Seed of the filter's random numbers.
-    sponge : SpongeBox
-        Sponge dimensions, metres.
-    position_noise : float
-        Per-frame random walk of a particle's position around the prediction, metres
-        (standard deviation per axis).
-    yaw_noise : float
-        Per-frame random walk of yaw, rad.
-    likelihood_gain : float
-        Log-likelihood per unit of score (sharpness of the weights).
-    search_offsets : tuple of float
-        Distances of the inside/outside samples from the outline when weighting particles,
-        metres.
-    refine_offsets : tuple of float
-        The same for the refinement (closer to the outline, so that the optimum is sharp).
-    refine_steps : tuple of float
-        Typical refinement step: x, y, z (metres), yaw (rad); Newton steps are limited to
-        four of them per iteration.
-    refine_iterations : int
-        Most Newton steps per frame.
-    blur_sigma : float
-        Gaussian blur of the colour feature the refinement reads, pixels (smooths the score
-        below a pixel).
-    window_margin : int
-        Margin, pixels, around the predicted sponge boxes (grown by the farthest sample
-        offset) of the window where frames are scored: room for the blur and the refinement.
-    min_contrast : float
-        Silhouette contrast (back-projection) each camera needs for a valid frame.
-    min_coverage : float
-        Fraction of the faces turned to a camera that must look sponge-coloured in it.
-    retry_below : float
-        Refine again from other starting points when the summed contrast of both cameras is
-        below this fraction of its median over the last 30 valid frames.
-    retry_distance : float
-        Those starting points lie this far nearer and farther along the line of sight,
-        metres (plus one at the colour blob).
-    min_relative_contrast : float
-        A valid frame needs at least this fraction of that median contrast.
-    search_scale : float
-        Image scale of the global search for the sponge (acquisition, after occlusions).
-    min_blob_area : int
-        Fewest pixels (full resolution) of a colour blob to count as the sponge.
-    max_blob_reprojection : float
-        Largest reprojection error of triangulated blob centres, pixels.
+    sponge : SpongeBox or None
+        The sponge's dimensions when known: enables the box refinement. None: the sponge
+        is tracked by its colour region alone.
+    region : RegionTrackerParams
+    region_every : int
+        While the box fits, the region is measured on every n-th frame only (to keep the
+        offset between the two up to date).
     """
 
     particles: int = 100
     seed: int = 0
-    sponge: SpongeBox = field(default_factory=SpongeBox)
-    position_noise: float = 0.005
-    yaw_noise: float = 0.03
-    likelihood_gain: float = 30.0
-    search_offsets: tuple[float, ...] = (0.004, 0.008)
-    refine_offsets: tuple[float, ...] = (0.001, 0.0025, 0.0045)
-    refine_steps: tuple[float, float, float, float] = (0.001, 0.001, 0.001, 0.015)
-    refine_iterations: int = 8
-    blur_sigma: float = 0.7
-    window_margin: int = 4
-    min_contrast: float = 0.35
-    min_coverage: float = 0.30
-    retry_below: float = 0.9
-    retry_distance: float = 0.012
-    min_relative_contrast: float = 0.75
-    search_scale: float = 0.25
-    min_blob_area: int = 150
-    max_blob_reprojection: float = 25.0
+    sponge: SpongeBox | None = None
+    region: RegionTrackerParams = field(default_factory=RegionTrackerParams)
+    region_every: int = 5
 
     def __post_init__(self):
         if self.particles < 10:
@@ -134,370 +72,147 @@ class TrackerParams:
 
 @dataclass(frozen=True)
 class FrameEstimate:
-    """The tracker's answer for one frame.
+    """The tracker's answer for one frame pair.
 
     Attributes
     ----------
     pose : ndarray, shape (4,)
-        Sponge centre (x, y, z) in the tracking frame, metres, and yaw (rad); NaN when the
-        sponge has not been found yet or is lost.
+        Sponge centre (x, y, z) in the tracking frame, metres, and yaw (rad: of the box, or
+        of the colour region's longer axis); NaN when not valid.
     valid : bool
-        The sponge was seen in both images and ``pose`` measured; False when occluded/lost.
-    contrast, coverage : ndarray, shape (2,)
-        Per camera (left, right) at ``pose``.
+    quality : str
+        ``box``, ``centroid`` or ``""`` (not valid).
+    areas : ndarray, shape (2,)
+        Pixels of the sponge's colour region in the left and right image (0 when not
+        measured this frame).
     particles : ndarray, shape (n, 4)
-        The particle set after this frame.
+        The box refinement's particles (empty without it).
+    reason : str
+        Why a frame is not valid.
     """
 
     pose: np.ndarray
     valid: bool
-    contrast: np.ndarray
-    coverage: np.ndarray
+    quality: str
+    areas: np.ndarray
     particles: np.ndarray
-
-
-class _View:
-    """A camera as the tracker uses it: pose in the tracking frame, undistortion, size."""
-
-    def __init__(self, K: np.ndarray, D: np.ndarray, T_cam_track: np.ndarray,
-                 size: tuple[int, int]):
-        self.undistorter = Undistorter(K, D, size)
-        self.K = self.undistorter.K  # of the undistorted canvas
-        self.K_inverse = np.linalg.inv(self.K)
-        self.R = np.ascontiguousarray(T_cam_track[:3, :3])
-        self.t = np.ascontiguousarray(T_cam_track[:3, 3])
-        self.eye = invert_transform(T_cam_track)[:3, 3]
-
-    def window_around(self, points_track: np.ndarray, margin: int) -> tuple[int, int, int, int]:
-        """Pixel bounds (x0, y0, x1, y1) of the undistorted canvas that hold the projections
-        of points (n, 3) with ``margin`` pixels around them (pinhole projection, as
-        :func:`~wipelab.vision.undistortion.pinhole`); the whole canvas if a point lies behind
-        the camera."""
-        width, height = self.undistorter.size
-        camera = points_track @ self.R.T + self.t
-        z = camera[:, 2]
-        if not np.all(z > 1e-6):
-            return 0, 0, width, height
-        x, y = camera[:, 0] / z, camera[:, 1] / z
-        K = self.K
-        u = K[0, 0] * x + K[0, 1] * y + K[0, 2]
-        v = K[1, 1] * y + K[1, 2]
-        x0 = min(max(math.floor(u.min()) - margin, 0), width - 1)
-        y0 = min(max(math.floor(v.min()) - margin, 0), height - 1)
-        x1 = min(max(math.ceil(u.max()) + margin, x0 + 1), width)
-        y1 = min(max(math.ceil(v.max()) + margin, y0 + 1), height)
-        return x0, y0, x1, y1
-
-
-@dataclass
-class _Window:
-    """One camera's scoring window of one frame: back-projection and linear feature."""
-
-    probability: ViewImage
-    feature: ViewImage
+    reason: str = ""
 
 
 class SpongeTracker:
-    """Track a coloured sponge box in 3D through a calibrated stereo video.
+    """Track the sponge in 3D through a calibrated stereo video, frame by frame.
 
     Parameters
     ----------
     calibration : StereoCalibration
         Poses are reported in ``calibration.track_frame`` (world if it has T_world_left).
     colour : ColourSource
-        How to learn the sponge's colour (on the first frame pair where it is found).
+        The sponge body's colour (a named colour, an HSV range or a region of the first left
+        frame).
     params : TrackerParams
     """
 
     def __init__(self, calibration: StereoCalibration, colour: ColourSource,
                  params: TrackerParams = TrackerParams()):
         self.calibration = calibration
-        self.colour = colour
         self.params = params
-        self.coarse = SpongeTemplate.build(params.sponge, edge_spacing=0.03, face_spacing=0.035)
-        self.fine = SpongeTemplate.build(params.sponge, edge_spacing=0.014, face_spacing=0.016)
-        T_left_track = invert_transform(calibration.T_track_left)
-        size = calibration.image_size
-        self.views = (_View(calibration.K1, calibration.D1, T_left_track, size),
-                      _View(calibration.K2, calibration.D2,
-                            calibration.right.T_cam_ref @ T_left_track, size))
-        # Orientation of the table (z = up) in the tracking frame; the world's z is up.
-        self.R_track_table = np.eye(3) if calibration.T_world_left is not None else None
-        self.model: ColourModel | None = None
+        self.region = RegionTracker(calibration, colour, params.region)
+        self.box = None
+        if params.sponge is not None:
+            self.box = BoxTracker(calibration, BoxParams(particles=params.particles,
+                                                         seed=params.seed,
+                                                         sponge=params.sponge))
+        self.T_track_left = calibration.T_track_left
+        self.T_left_track = invert_transform(self.T_track_left)
         self.feature: LinearColourFeature | None = None
-        self.rng = np.random.default_rng(params.seed)
-        self.particles: np.ndarray | None = None
-        self.history: deque[np.ndarray] = deque(maxlen=3)  # last valid poses, newest first
-        self.blob_offset: np.ndarray | None = None  # sponge centre minus colour-blob centre
-        self._sample_cache: dict[tuple, ViewSamples] = {}
-        self.recent_contrast: deque[float] = deque(maxlen=30)  # of the last valid frames
+        self.offsets: deque[np.ndarray] = deque(maxlen=30)  # box centre - region point, left
+        self.frame = -1
 
-    # ------------------------------------------------------------------ public
+    @property
+    def identified(self) -> bool:
+        """Whether the sponge has been found."""
+        return self.region.identified
+
+    @property
+    def ready(self) -> bool:
+        """Whether everything a second pass needs is known (sponge, plane of motion)."""
+        return self.region.identified and self.region.sponge_plane() is not None
+
+    def restart(self) -> None:
+        """Forget the track, keep what was learnt (for a second pass from the video's start)."""
+        self.region.restart()
+        if self.box is not None:
+            self.box.tracking = False
+        self.frame = -1
+
     def step(self, left: np.ndarray, right: np.ndarray) -> FrameEstimate:
-        """Process the next synchronised frame pair (BGR uint8, one frame period later)."""
-        frames = (left, right)
-        if self.model is None and not self._learn_colour(frames):
-            return self._invalid()
-        if not self.history:  # never found, or lost: look for the sponge everywhere
-            if not self._search(frames):
-                if self.particles is not None:
-                    self._diffuse(2.0)
-                return self._invalid()
+        """Process the next synchronised frame pair (BGR uint8)."""
+        self.frame += 1
+        if self.box is not None and self.box.tracking:
+            estimate = self._box_step(left, right)
+            if estimate is not None:
+                return estimate
+        region = self.region.step(left, right)
+        if not region.valid:
+            return FrameEstimate(np.full(4, np.nan), False, QUALITY_NONE, region.areas,
+                                 self._particles(), region.reason)
+        point = region.point + self._offset()
+        if self.box is not None:
+            self._start_box(left, right, point)
+        pose = np.append(transform_points(self.T_track_left, point),
+                         self._yaw(region.direction))
+        return FrameEstimate(pose, True, QUALITY_CENTROID, region.areas, self._particles())
+
+    def _yaw(self, direction_left: np.ndarray) -> float:
+        """Yaw (rad, half turn) of the region's long axis (3,), left frame, about the table
+        normal, measured like the box's (from :func:`table_axes` of the tracking frame)."""
+        plane = self.region.sponge_plane()
+        R_track_table = table_axes(self.T_track_left[:3, :3] @ plane.normal)
+        d = R_track_table.T @ (self.T_track_left[:3, :3] @ direction_left)
+        return float(wrap_half_turn(np.arctan2(d[1], d[0])))
+
+    # -------------------------------------------------------------- the box
+    def _box_step(self, left, right) -> FrameEstimate | None:
+        """The box fit of this frame, or None when it failed (the region takes over)."""
+        box = self.box.step(left, right)
+        if not box.valid:
+            return None
+        centre_left = transform_points(self.T_left_track, box.pose[:3])
+        areas = np.zeros(2)
+        if not self.offsets or self.frame % self.params.region_every == 0:
+            region = self.region.step(left, right)
+            areas = region.areas
+            if region.valid:
+                self.offsets.append(centre_left - region.point)
         else:
-            self._predict()
-        return self._measure(frames)
+            self.region.observe(centre_left - self._offset())
+        return FrameEstimate(box.pose, True, QUALITY_BOX, areas, box.particles)
 
-    # ------------------------------------------------------------- acquisition
-    def _learn_colour(self, frames) -> bool:
-        """Fit the colour models from the seed (name, HSV range or region); False if the
-        sponge's colour is not found in both frames."""
-        p = self.params
-        colour_range = self.colour.hsv_range
-        if colour_range is not None:
-            masks = [largest_blob(colour_range.mask(cv2.cvtColor(f, cv2.COLOR_BGR2HSV)),
-                                  p.min_blob_area) for f in frames]
-            if any(mask is None for mask in masks):
-                return False
-        else:
-            x, y, w, h = self.colour.roi
-            roi = np.zeros(frames[0].shape[:2], np.uint8)
-            roi[y:y + h, x:x + w] = 255
-            model = ColourModel.fit([frames[0]], [roi])
-            masks = [largest_blob(cv2.bitwise_and(roi, _mask(model.back_project(frames[0]))),
-                                  p.min_blob_area),
-                     largest_blob(_mask(model.back_project(frames[1])), p.min_blob_area)]
-            if any(mask is None for mask in masks):
-                return False
-        self.model = ColourModel.fit(list(frames), masks)
-        self.feature = LinearColourFeature.fit(list(frames), masks)
-        return True
+    def _offset(self) -> np.ndarray:
+        """Box centre minus region point (3,), left frame: median over recent frames, 0
+        before the box ever fitted."""
+        return np.median(np.array(self.offsets), axis=0) if self.offsets else np.zeros(3)
 
-    def _blob_centres(self, frames) -> list[np.ndarray] | None:
-        """Centroid (pixels, full resolution) of the largest sponge-coloured blob per image."""
-        p = self.params
-        centres = []
-        for frame in frames:
-            small = cv2.resize(frame, None, fx=p.search_scale, fy=p.search_scale,
-                               interpolation=cv2.INTER_AREA)
-            blob = largest_blob(_mask(self.model.back_project(small)),
-                                max(4, int(p.min_blob_area * p.search_scale ** 2)))
-            if blob is None:
-                return None
-            m = cv2.moments(blob, binaryImage=True)
-            centre = np.array([m["m10"], m["m01"]]) / m["m00"]
-            centres.append((centre + 0.5) / p.search_scale - 0.5)
-        return centres
+    def _start_box(self, left, right, centre_left: np.ndarray) -> None:
+        """Seed the box refinement at the region's estimate (and learn the colour feature the
+        refinement reads on the first occasion)."""
+        region = self.region
+        if region.table is None:
+            return
+        if self.feature is None:
+            self.feature = LinearColourFeature.fit(region.seed_windows, region.seed_masks)
+        R_track_table = table_axes(self.T_track_left[:3, :3] @ region.table.normal)
+        if self.box.R_track_table is not None and np.allclose(self.box.R_track_table,
+                                                              R_track_table):
+            R_track_table = self.box.R_track_table
+        if not self.offsets:
+            # before the first fit: the box centre half the sponge's height above the table
+            height = self.params.sponge.height / 2 - float(region.table.distance(centre_left))
+            centre_left = centre_left + height * region.table.normal
+        self.box.start(region.model, self.feature, R_track_table,
+                       transform_points(self.T_track_left, centre_left))
 
-    def _search(self, frames) -> bool:
-        """Find the sponge anywhere in both images and spread fresh particles around it."""
-        p = self.params
-        centres = self._blob_centres(frames)
-        if centres is None:
-            return False
-        point_left = triangulate_pixels(self.calibration, centres[0][None], centres[1][None])
-        error = reprojection_errors(self.calibration, point_left, centres[0][None],
-                                    centres[1][None])[0]
-        if not (0.05 < point_left[0, 2] < 10.0) or error > p.max_blob_reprojection:
-            return False
-        guess = transform_points(self.calibration.T_track_left, point_left[0])
-        if self.R_track_table is None:
-            self.R_track_table = self._estimate_table_rotation(frames, guess)
-        self.particles = self._spread(guess, 4 * p.particles)
-        return True
-
-    def _spread(self, centre: np.ndarray, n: int) -> np.ndarray:
-        """n particles around a position, any yaw."""
-        particles = np.empty((n, 4))
-        particles[:, :3] = centre + self.rng.normal(size=(n, 3)) * 0.015
-        particles[:, 3] = self.rng.uniform(-0.5 * np.pi, 0.5 * np.pi, n)
-        return particles
-
-    def _estimate_table_rotation(self, frames, guess: np.ndarray) -> np.ndarray:
-        """Without a world frame: choose the table orientation under which a refined sponge
-        box near ``guess`` shows the clearest outline.
-
-        The table normal is the left camera's up (-y) tilted away from its optical axis (as
-        for a camera looking down) by a pitch, then rolled about the optical axis; searched
-        on a 10 degree grid, then on a 2 degree grid around its best.
-        """
-        poses = self._spread(guess, 2 * self.params.particles)
-
-        def table_rotation(pitch: float, roll: float) -> np.ndarray:
-            up = (cv2.Rodrigues(np.array([0.0, 0.0, roll]))[0]
-                  @ cv2.Rodrigues(np.array([pitch, 0.0, 0.0]))[0] @ [0.0, -1.0, 0.0])
-            forward = np.cross([1.0, 0.0, 0.0], up)
-            forward /= np.linalg.norm(forward)
-            return self.calibration.T_track_left[:3, :3] @ np.column_stack(
-                [np.cross(forward, up), forward, up])
-
-        def best_of(pitches, rolls) -> tuple[float, float]:
-            best, best_score = (0.0, 0.0), -np.inf
-            for pitch in np.deg2rad(pitches):
-                for roll in np.deg2rad(rolls):
-                    self.R_track_table = table_rotation(pitch, roll)
-                    self._sample_cache.clear()
-                    windows = self._windows(frames, poses)
-                    start = poses[int(np.argmax(self._score(poses, windows)))]
-                    score = self._quality(self._refine(start, windows), windows)[0].sum()
-                    if score > best_score:
-                        best, best_score = (np.rad2deg(pitch), np.rad2deg(roll)), score
-            return best
-
-        pitch, roll = best_of(np.arange(0, 91, 10), np.arange(-30, 31, 10))
-        pitch, roll = best_of(pitch + np.arange(-8, 9, 2), roll + np.arange(-8, 9, 2))
-        self._sample_cache.clear()
-        return table_rotation(np.deg2rad(pitch), np.deg2rad(roll))
-
-    # ---------------------------------------------------------------- tracking
-    def _predict(self) -> None:
-        """Move the particles with the extrapolated motion of the last valid poses."""
-        h = self.history
-        motion = np.zeros(3)
-        if len(h) >= 2:
-            velocity = h[0][:3] - h[1][:3]
-            acceleration = (velocity - (h[1][:3] - h[2][:3])) if len(h) == 3 else 0.0
-            motion = velocity + 0.5 * acceleration
-        self.particles[:, :3] += motion
-        self._diffuse(1.0)
-
-    def _diffuse(self, scale: float) -> None:
-        p = self.params
-        n = len(self.particles)
-        self.particles[:, :3] += self.rng.normal(size=(n, 3)) * (scale * p.position_noise)
-        self.particles[:, 3] += self.rng.normal(size=n) * p.yaw_noise
-
-    def _samples(self, template: SpongeTemplate, pose: np.ndarray, offsets
-                 ) -> list[ViewSamples]:
-        """Per-camera sample sets for boxes near ``pose`` (visibility decided at ``pose``)."""
-        R_track_sponge = self.R_track_table @ yaw_rotation(pose[3])
-        sets = []
-        for index, view in enumerate(self.views):
-            faces, edges = facing_camera(R_track_sponge, pose[:3], view.eye, self.params.sponge)
-            key = (id(template), index, faces.tobytes(), offsets)
-            if key not in self._sample_cache:  # a few face combinations occur per camera
-                self._sample_cache[key] = view_samples(template, view.R @ self.R_track_table,
-                                                       faces, edges, offsets)
-            sets.append(self._sample_cache[key])
-        return sets
-
-    def _windows(self, frames, poses: np.ndarray) -> list[_Window]:
-        """Score images of each camera inside a window around the boxes of ``poses``."""
-        p = self.params
-        # the corners of every pose's box, grown by the farthest sample offset so that the
-        # outside samples lie in the window too
-        half = p.sponge.half_extents + max(p.search_offsets + p.refine_offsets)
-        table = (CORNER_SIGNS * half) @ np.swapaxes(yaw_rotation(poses[:, 3]), 1, 2)
-        corners = (poses[:, None, :3] + table @ self.R_track_table.T).reshape(-1, 3)
-        windows = []
-        for view, frame in zip(self.views, frames):
-            x0, y0, x1, y1 = view.window_around(corners, p.window_margin)
-            crop = view.undistorter.window(frame, x0, y0, x1, y1)
-            feature = self.feature.apply(crop)
-            if p.blur_sigma > 0:
-                feature = cv2.GaussianBlur(feature, (0, 0), p.blur_sigma)
-            origin = (float(x0), float(y0))
-            windows.append(_Window(
-                ViewImage(self.model.back_project(crop), origin, view.K, view.R, view.t),
-                ViewImage(feature, origin, view.K, view.R, view.t)))
-        return windows
-
-    def _window_blob(self, windows: list[_Window]) -> np.ndarray | None:
-        """Triangulated centre (tracking frame) of the sponge-coloured pixels of both windows,
-        or None when a window shows too few of them."""
-        rays = []
-        for window, view in zip(windows, self.views):
-            m00, m10, m01 = threshold_moments(window.probability.probability, 0.5)
-            if m00 < self.params.min_blob_area:
-                return None
-            centre = np.array([m10, m01]) / m00 + window.probability.origin
-            rays.append((view.eye, view.R.T @ (view.K_inverse @ np.append(centre, 1.0))))
-        return closest_point_of_rays(*rays[0], *rays[1])
-
-    def _score(self, poses: np.ndarray, windows: list[_Window]) -> np.ndarray:
-        """Particle score on the back-projection: both cameras' contrast plus half their
-        coverage."""
-        reference = weighted_pose_mean(poses, np.full(len(poses), 1.0 / len(poses)))
-        poses = align_yaw(poses, reference[3])
-        total = np.zeros(len(poses))
-        samples = self._samples(self.coarse, reference, self.params.search_offsets)
-        for view_samples_, window in zip(samples, windows):
-            contrast, coverage = score_view(poses, view_samples_, window.probability)
-            total += contrast + 0.5 * coverage
-        return total
-
-    def _measure(self, frames) -> FrameEstimate:
-        p = self.params
-        windows = self._windows(frames, self.particles)
-        blob = self._window_blob(windows)
-        if blob is not None and self.blob_offset is not None and len(self.particles) <= p.particles:
-            # half of the particles follow the colour blob instead of the motion model: they
-            # catch the sponge when it turns faster than the extrapolation expects
-            half = len(self.particles) // 2
-            self.particles[half:, :3] = (blob + self.blob_offset
-                                         + self.rng.normal(size=(len(self.particles) - half, 3))
-                                         * p.position_noise)
-        scores = self._score(self.particles, windows)
-        weights = normalised_weights(p.likelihood_gain * scores)
-        best = self.particles[int(np.argmax(scores))]
-        near_best = np.linalg.norm(self.particles[:, :3] - best[:3], axis=1) < 0.01
-        estimate = weighted_pose_mean(align_yaw(self.particles[near_best], best[3]),
-                                      weights[near_best] / weights[near_best].sum())
-        pose = self._refine(estimate, windows)
-        contrast, coverage = self._quality(pose, windows)
-        typical = statistics.median(self.recent_contrast) if self.recent_contrast else 0.0
-        if contrast.sum() < p.retry_below * typical:
-            # a weak fit: the outline may have locked onto a hand's edge (a box too small
-            # and too far, or too big and too near); try again from further along the line
-            # of sight and from the colour blob, keep the best
-            ray = estimate[:3] - 0.5 * (self.views[0].eye + self.views[1].eye)
-            ray /= np.linalg.norm(ray)
-            starts = [estimate + np.append(sign * p.retry_distance * ray, 0.0)
-                      for sign in (-1.0, 1.0)]
-            if blob is not None and self.blob_offset is not None:
-                starts.append(np.append(blob + self.blob_offset, estimate[3]))
-            for start in starts:
-                candidate = self._refine(start, windows)
-                quality = self._quality(candidate, windows)
-                if quality[0].sum() > contrast.sum():
-                    pose, (contrast, coverage) = candidate, quality
-        valid = bool(np.all(contrast >= p.min_contrast) and np.all(coverage >= p.min_coverage)
-                     and contrast.sum() >= p.min_relative_contrast * typical)
-        if valid:
-            keep = systematic_resample(weights, self.rng)
-            self.particles = self.particles[keep[np.linspace(0, len(keep) - 1, p.particles)
-                                                 .astype(int)]]
-            self.history.appendleft(pose.copy())
-            self.recent_contrast.append(float(contrast.sum()))
-            self.blob_offset = None if blob is None else pose[:3] - blob
-        else:
-            self.particles = self.particles[self.rng.choice(len(self.particles), p.particles,
-                                                            replace=False)]
-            self.history.clear()
-            pose = np.full(4, np.nan)
-        return FrameEstimate(pose, valid, contrast, coverage, self.particles.copy())
-
-    def _refine(self, estimate: np.ndarray, windows: list[_Window]) -> np.ndarray:
-        """Newton refinement of a pose on the linear colour feature of both cameras."""
-        p = self.params
-        contrast = SilhouetteContrast(list(zip(
-            self._samples(self.fine, estimate, p.refine_offsets),
-            [window.feature for window in windows])))
-        pose, _ = contrast.refine(estimate, np.array(p.refine_steps),
-                                  iterations=p.refine_iterations)
-        pose[3] = wrap_half_turn(pose[3])
-        return pose
-
-    def _quality(self, pose: np.ndarray, windows: list[_Window]) -> tuple[np.ndarray, np.ndarray]:
-        """Silhouette contrast (2,) and face coverage (2,) of a pose on the back-projections."""
-        quality = [score_view(pose[None], samples, window.probability) for samples, window in
-                   zip(self._samples(self.fine, pose, self.params.refine_offsets), windows)]
-        return (np.array([q[0][0] for q in quality]), np.array([q[1][0] for q in quality]))
-
-    def _invalid(self) -> FrameEstimate:
-        particles = self.particles.copy() if self.particles is not None else np.zeros((0, 4))
-        return FrameEstimate(np.full(4, np.nan), False, np.zeros(2), np.zeros(2), particles)
-
-
-def _mask(probability: np.ndarray) -> np.ndarray:
-    """Pixels more likely sponge than not, uint8 0/255."""
-    return cv2.threshold(probability, 0.5, 255, cv2.THRESH_BINARY)[1].astype(np.uint8)
+    def _particles(self) -> np.ndarray:
+        if self.box is None or self.box.particles is None:
+            return np.zeros((0, 4))
+        return self.box.particles.copy()

@@ -40,13 +40,18 @@ class Undistorter:
         self.K[:2, 2] -= low
         self.size = tuple(int(v) for v in np.minimum(high - low + 1, 3 * np.array(size)))
         self.K_distorted, self.D = K, D
+        self.frame_size = (int(width), int(height))
         map_u, map_v = cv2.initUndistortRectifyMap(K, D, None, self.K, self.size, cv2.CV_32FC1)
         # fixed-point maps (1/32 pixel) make the per-frame resampling several times faster
         self.map_xy, self.map_fraction = cv2.convertMaps(map_u, map_v, cv2.CV_16SC2)
 
-    def window(self, frame: np.ndarray, x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
-        """Undistorted pixels [y0, y1) x [x0, x1) of ``frame`` (black outside the frame)."""
-        return cv2.remap(frame, self.map_xy[y0:y1, x0:x1], self.map_fraction[y0:y1, x0:x1],
+    def window(self, frame: np.ndarray, x0: int, y0: int, x1: int, y1: int,
+               step: int = 1) -> np.ndarray:
+        """Undistorted pixels [y0, y1) x [x0, x1) of ``frame`` (black outside the frame);
+        with ``step`` > 1 only every step-th row and column (window pixel (i, j) is canvas
+        pixel (x0 + j step, y0 + i step))."""
+        return cv2.remap(frame, self.map_xy[y0:y1:step, x0:x1:step],
+                         self.map_fraction[y0:y1:step, x0:x1:step],
                          cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
 
 

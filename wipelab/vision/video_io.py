@@ -6,19 +6,20 @@ libx264 output is deterministic, so the same frames give the same bytes.
 
 from __future__ import annotations
 
+import atexit
 import os
 import queue
 import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from fractions import Fraction
-from pathlib import Path
 
 import av
 import cv2
 import numpy as np
 
 from wipelab.errors import InputError
+from wipelab.input_files import check_readable
 
 
 @dataclass(frozen=True)
@@ -40,9 +41,7 @@ def probe_video(path: str | os.PathLike) -> VideoInfo:
     InputError
         Missing file, a file OpenCV cannot decode, no frames, or no frame rate.
     """
-    name = str(path)
-    if not Path(path).is_file():
-        raise InputError(f"{name}: file not found")
+    name = str(check_readable(path))
     capture = cv2.VideoCapture(name, cv2.CAP_FFMPEG)
     try:
         if not capture.isOpened():
@@ -114,28 +113,57 @@ class StereoVideoReader:
         return self.left.fps
 
     def __iter__(self) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-        """Yield (left, right) BGR uint8 frames, shape (h, w, 3) each."""
-        stop = threading.Event()
-        queues = [queue.Queue(self.prefetch), queue.Queue(self.prefetch)]
-        threads = [threading.Thread(target=_decode, args=(info.path, q, stop), daemon=True)
-                   for info, q in zip((self.left, self.right), queues)]
-        for thread in threads:
-            thread.start()
+        """Yield (left, right) BGR uint8 frames, shape (h, w, 3) each.
+
+        The decoders stop when the iteration ends, fails or is interrupted, and at the
+        latest when the program exits (a decoder thread still inside FFmpeg then would
+        abort the process).
+        """
+        decoders = _Decoders((self.left.path, self.right.path), self.prefetch)
         try:
+            decoders.start()
             for index in range(self.frame_count):
-                frames = [q.get() for q in queues]
+                frames = [q.get() for q in decoders.queues]
                 for frame, info in zip(frames, (self.left, self.right)):
                     if frame is None:
                         raise InputError(f"{info.path}: truncated, decoding stopped at frame "
                                          f"{index} of {info.frame_count}")
                 yield frames[0], frames[1]
         finally:
-            stop.set()
-            for q in queues:  # unblock the decoders so that they can see the stop flag
-                while not q.empty():
-                    q.get_nowait()
-            for thread in threads:
+            decoders.stop()
+
+
+class _Decoders:
+    """One decoding thread per file, each filling its queue until told to stop."""
+
+    running: set[_Decoders] = set()
+
+    def __init__(self, paths: tuple[str, ...], prefetch: int):
+        self.halt = threading.Event()
+        self.queues = [queue.Queue(prefetch) for _ in paths]
+        self.threads = [threading.Thread(target=_decode, args=(path, q, self.halt), daemon=True)
+                        for path, q in zip(paths, self.queues)]
+
+    def start(self) -> None:
+        _Decoders.running.add(self)
+        for thread in self.threads:
+            thread.start()
+
+    def stop(self) -> None:
+        self.halt.set()
+        for q in self.queues:  # unblock the decoders so that they can see the stop flag
+            while not q.empty():
+                q.get_nowait()
+        for thread in self.threads:
+            if thread.is_alive():
                 thread.join(timeout=5.0)
+        _Decoders.running.discard(self)
+
+
+@atexit.register
+def _stop_running_decoders() -> None:
+    for decoders in list(_Decoders.running):
+        decoders.stop()
 
 
 class H264Writer:

@@ -1,0 +1,91 @@
+"""Telling the sponge from other things of its colour: stereo pairing, motion, static objects."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from wipelab.vision.acquisition import CandidateTracks, StereoCandidate, stereo_candidates
+from wipelab.vision.colour_regions import Blob
+
+K = np.array([[600.0, 0.0, 320.0], [0.0, 600.0, 240.0], [0.0, 0.0, 1.0]])
+R = np.eye(3)
+T = np.array([-0.1, 0.0, 0.0])  # the right camera 10 cm to the right
+
+
+def _blob(point_camera, size, label):
+    """A blob as a camera at the origin sees an object of ``size`` metres at a point."""
+    uv = K[:2, :2] @ (point_camera[:2] / point_camera[2]) + K[:2, 2]
+    area = (size * K[0, 0] / point_camera[2]) ** 2
+    return Blob(uv, area, (0, 0, 1, 1), np.zeros((1, 1, 2), np.int32), label)
+
+
+def _ray(blob):
+    return np.linalg.inv(K) @ np.append(blob.centroid, 1.0)
+
+
+def _views(points_and_sizes):
+    left = [_blob(p, s, i + 1) for i, (p, s) in enumerate(points_and_sizes)]
+    right = [_blob(p + T, s, i + 1) for i, (p, s) in enumerate(points_and_sizes)]
+    return left, right
+
+
+def test_pairs_follow_the_epipolar_geometry_and_plausible_sizes():
+    sponge = (np.array([0.05, 0.1, 0.8]), 0.09)
+    cloth = (np.array([-0.2, 0.15, 0.9]), 0.30)
+    speck = (np.array([0.2, -0.1, 0.7]), 0.005)  # far too small for a sponge
+    left, right = _views([sponge, cloth, speck])
+    right = right[::-1]  # order does not matter
+    rays_left = np.array([_ray(b) for b in left])
+    rays_right = np.array([_ray(b) for b in right])
+    found = stereo_candidates(left, right, rays_left, rays_right, R, T, (600.0, 600.0), 1.0,
+                              K, K)
+    assert len(found) == 2
+    sizes = sorted(c.size for c in found)
+    assert abs(sizes[0] - 0.09) < 1e-6 and abs(sizes[1] - 0.30) < 1e-6
+    for candidate in found:
+        assert candidate.epipolar_error < 1e-6
+        assert candidate.blobs[0].label == candidate.blobs[1].label
+    nearest = min(found, key=lambda c: c.size)
+    assert np.linalg.norm(nearest.point - sponge[0]) < 1e-9
+
+
+def test_a_blob_pair_that_breaks_the_epipolar_geometry_is_no_candidate():
+    left, right = _views([(np.array([0.05, 0.1, 0.8]), 0.09)])
+    shifted = Blob(right[0].centroid + [0.0, 25.0], right[0].area, (0, 0, 1, 1),
+                   right[0].outline, 1)
+    found = stereo_candidates(left, [shifted], np.array([_ray(left[0])]),
+                              np.array([_ray(shifted)]), R, T, (600.0, 600.0), 1.0, K, K)
+    assert found == []
+
+
+def _candidate(point, size):
+    b = Blob(np.zeros(2), 1.0, (0, 0, 1, 1), np.zeros((1, 1, 2), np.int32), 1)
+    return StereoCandidate(np.asarray(point, float), size, (b, b), 0.0)
+
+
+def test_the_moving_object_is_picked_and_the_still_one_remembered_as_static():
+    tracks = CandidateTracks()
+    cloth = np.array([-0.3, 0.1, 0.9])
+    for frame in range(90):
+        phase = 2 * np.pi * frame / 30.0
+        sponge = np.array([0.1 * np.cos(phase), 0.1 + 0.05 * np.sin(phase), 0.8])
+        tracks.update(frame, [_candidate(cloth, 0.3), _candidate(sponge, 0.09)])
+        if frame < 14:  # not seen long enough to judge (half a second)
+            assert tracks.moving(frame) is None
+    moving = tracks.moving(89)
+    assert moving is not None and abs(moving.size - 0.09) < 1e-9
+    assert tracks.is_static(cloth + 0.01, 0.28)
+    assert not tracks.is_static(np.array([0.1, 0.1, 0.8]), 0.09)
+
+
+def test_a_resting_sponge_is_static_until_it_moves():
+    tracks = CandidateTracks()
+    rest = np.array([0.0, 0.1, 0.8])
+    for frame in range(70):
+        tracks.update(frame, [_candidate(rest, 0.09)])
+    assert tracks.is_static(rest, 0.09) and tracks.moving(69) is None
+    for frame in range(70, 130):
+        phase = 2 * np.pi * (frame - 70) / 30.0
+        tracks.update(frame, [_candidate(rest + [0.1 * np.sin(phase), 0.0, 0.0], 0.09)])
+    assert not tracks.is_static(rest, 0.09)
+    assert tracks.moving(129) is not None

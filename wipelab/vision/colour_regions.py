@@ -1,0 +1,137 @@
+"""Sponge-coloured regions of an image: a soft colour prior from a named colour, and the
+connected regions (blobs) of a colour probability image with sub-pixel centroids.
+
+The named colours of :data:`~wipelab.vision.colour_model.NAMED_COLOURS` are boxes in HSV.
+A real sponge's body drifts out of such a box under coloured light and shading, so the
+prior is soft: full inside the box, falling off over a few hue and saturation units outside.
+Once the tracker has found the sponge it learns its own colour model from the sponge's
+pixels (:meth:`~wipelab.vision.colour_model.ColourModel.fit`) and no longer needs the box.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from wipelab.vision.colour_model import H_BINS, S_BINS, ColourModel, HsvRange
+
+#: Width of the prior's fall-off outside the named box: hue (OpenCV units, 0-179) and
+#: saturation (0-255).
+HUE_MARGIN, SATURATION_MARGIN = 5.0, 30.0
+
+
+def prior_model(colour: HsvRange, hue_margin: float = HUE_MARGIN,
+                saturation_margin: float = SATURATION_MARGIN) -> ColourModel:
+    """A colour model that reads 1 inside the HSV box ``colour`` and falls off linearly to 0
+    within ``hue_margin`` and ``saturation_margin`` outside it (value: pixels darker than
+    60 % of the box's lowest value are never sponge)."""
+    hue = (np.arange(H_BINS) + 0.5) * 180.0 / H_BINS
+    saturation = (np.arange(S_BINS) + 0.5) * 256.0 / S_BINS
+    low, high = colour.low[0], colour.high[0]
+    centre = 0.5 * (low + high) if low <= high else (0.5 * (low + high + 180.0)) % 180.0
+    half = 0.5 * ((high - low) % 180.0)
+    distance = np.abs((hue - centre + 90.0) % 180.0 - 90.0)  # circular hue distance
+    hue_membership = np.clip(1.0 - (distance - half) / hue_margin, 0.0, 1.0)
+    saturation_membership = np.clip(
+        1.0 - np.maximum(colour.low[1] - saturation, saturation - colour.high[1])
+        / saturation_margin, 0.0, 1.0)
+    ratio = np.outer(hue_membership, saturation_membership)
+    return ColourModel(ratio, v_min=int(0.6 * colour.low[2]))
+
+
+@dataclass(frozen=True)
+class Blob:
+    """A connected region of a probability image (its outer outline; holes, such as a hand
+    on top of the sponge, are inside it).
+
+    Attributes
+    ----------
+    centroid : ndarray, shape (2,)
+        Centre (u, v) of the area its outline encloses, pixels of the image it was found in.
+    area : float
+        Pixels its outline encloses.
+    bbox : tuple of int
+        (x0, y0, x1, y1), exclusive upper bounds.
+    outline : ndarray, shape (k, 1, 2)
+        The outline, int32 pixel coordinates (OpenCV contour).
+    label : int
+        Its index in the list :func:`find_blobs` returned.
+    """
+
+    centroid: np.ndarray
+    area: float
+    bbox: tuple[int, int, int, int]
+    outline: np.ndarray
+    label: int
+
+    @property
+    def radius(self) -> float:
+        """Radius of a disc of the same area, pixels."""
+        return float(np.sqrt(self.area / np.pi))
+
+
+def find_blobs(probability: np.ndarray, min_area: float, threshold: float = 0.5,
+               opening: int = 3) -> list[Blob]:
+    """Connected regions of ``probability > threshold`` (after an opening of ``opening``
+    pixels) whose outlines enclose at least ``min_area`` pixels, largest first."""
+    mask = (probability > threshold).astype(np.uint8)
+    if opening > 1:
+        mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((opening, opening), np.uint8))
+    outlines, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    found = []
+    for outline in outlines:
+        m = cv2.moments(outline)
+        # the polygon through the boundary pixels' centres misses half a pixel all round
+        area = m["m00"] + 0.5 * cv2.arcLength(outline, True) + 1.0
+        if area < min_area:
+            continue
+        x, y, w, h = cv2.boundingRect(outline)
+        centroid = (np.array([m["m10"], m["m01"]]) / m["m00"] if m["m00"] > 0
+                    else outline.reshape(-1, 2).mean(axis=0).astype(float))
+        found.append((area, centroid, (x, y, x + w, y + h), outline))
+    found.sort(key=lambda item: -item[0])
+    return [Blob(centroid, float(area), bbox, outline, k)
+            for k, (area, centroid, bbox, outline) in enumerate(found)]
+
+
+def blob_mask(shape: tuple[int, int], blobs: list[Blob], grow: int = 1) -> np.ndarray:
+    """Bool mask (shape) of the areas the blobs' outlines enclose, grown by ``grow`` pixels
+    (so that the soft edge just outside the threshold counts too)."""
+    mask = np.zeros(shape, np.uint8)
+    cv2.drawContours(mask, [blob.outline for blob in blobs], -1, 1, thickness=-1)
+    if grow > 0:
+        mask = cv2.dilate(mask, np.ones((2 * grow + 1, 2 * grow + 1), np.uint8))
+    return mask > 0
+
+
+def region_moments(probability: np.ndarray, inside: np.ndarray, origin: tuple[float, float],
+                   step: float = 1.0) -> tuple[np.ndarray, float, float, np.ndarray, float]:
+    """Moments of the pixels ``inside`` (bool, same shape) of a probability image whose
+    pixel (i, j) sits at ``origin + step (j, i)``, each weighted by its probability (soft
+    edges of blur and mixed pixels count in proportion).
+
+    Returns
+    -------
+    centroid : ndarray, shape (2,)
+        (u, v), NaN for an empty region.
+    area : float
+        Pixels inside, in units of the origin's pixels.
+    mass : float
+        Sum of the probabilities inside (in the image's own pixels).
+    axis : ndarray, shape (2,)
+        Unit direction of the region's longer axis.
+    elongation : float
+        Ratio of the second moments along and across that axis (1 for a round region).
+    """
+    weights = np.where(inside, probability, 0.0).astype(np.float32)
+    m = cv2.moments(weights)
+    mass = float(m["m00"])
+    area = float(np.count_nonzero(inside)) * step * step
+    if mass <= 0.0:
+        return np.full(2, np.nan), area, mass, np.array([1.0, 0.0]), 1.0
+    centroid = np.array([m["m10"], m["m01"]]) / mass * step + np.asarray(origin, float)
+    covariance = np.array([[m["mu20"], m["mu11"]], [m["mu11"], m["mu02"]]]) / mass
+    values, vectors = np.linalg.eigh(covariance)
+    return centroid, area, mass, vectors[:, 1], float(values[1] / max(values[0], 1e-12))

@@ -1,0 +1,134 @@
+"""What a camera sees where the sponge is not: a slowly updated background, for telling the
+sponge from still things of its colour that it touches or passes over.
+
+A cloth, a stain or a plate of the sponge's colour merges with the sponge's colour region
+whenever the sponge comes near. The background learns, only from what it sees *outside* the
+tracked sponge's region, where the scene shows the sponge's colour on its own; a pixel there
+that still looks as it did (no sponge over it) is not the sponge. Pixels the sponge has
+covered all along have no background yet and never count as still things.
+
+The background is kept at low resolution in the undistorted canvas of
+:class:`~wipelab.vision.undistortion.Undistorter`, so that a measurement window reads it
+with one affine warp.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from wipelab.vision.colour_model import ColourModel
+from wipelab.vision.undistortion import Undistorter
+
+
+class StaticBackground:
+    """A running-mean background of one camera, in its undistorted canvas.
+
+    Parameters
+    ----------
+    undistorter : Undistorter
+        The camera's undistortion (its canvas is the background's frame).
+    scale : float
+        Resolution of the background relative to the canvas.
+    rate : float
+        Weight of a new observation of a pixel in the running mean.
+    difference : float
+        A pixel differs from the background when one of its channels differs by more than
+        this (grey levels).
+    """
+
+    def __init__(self, undistorter: Undistorter, scale: float, rate: float = 0.1,
+                 difference: float = 24.0):
+        self.scale = scale
+        self.rate = rate
+        self.difference = difference
+        width, height = undistorter.size
+        self.size = (max(8, int(round(width * scale))), max(8, int(round(height * scale))))
+        # canvas pixel of each background pixel, then the distorted frame's pixel there
+        xs = (np.arange(self.size[0], dtype=np.float32) + 0.5) / scale - 0.5
+        ys = (np.arange(self.size[1], dtype=np.float32) + 0.5) / scale - 0.5
+        full_u, full_v = cv2.convertMaps(undistorter.map_xy, undistorter.map_fraction,
+                                         cv2.CV_32FC1)
+        grid_x, grid_y = np.meshgrid(xs, ys)
+        self.map_u = cv2.remap(full_u, grid_x, grid_y, cv2.INTER_LINEAR,
+                               borderMode=cv2.BORDER_CONSTANT, borderValue=-1e4)
+        self.map_v = cv2.remap(full_v, grid_x, grid_y, cv2.INTER_LINEAR,
+                               borderMode=cv2.BORDER_CONSTANT, borderValue=-1e4)
+        shape = (self.size[1], self.size[0])
+        # background pixels that see the frame at all (a wide-angle canvas has empty corners)
+        frame_width, frame_height = undistorter.frame_size
+        self.in_frame = ((self.map_u >= 0) & (self.map_v >= 0) & (self.map_u <= frame_width - 1)
+                         & (self.map_v <= frame_height - 1)).astype(np.float32)
+        # running sums weighted like an exponential mean; divided by ``seen`` when read
+        self.image = np.zeros(shape + (3,), np.float32)
+        self.colour = np.zeros(shape, np.float32)
+        self.seen = np.zeros(shape, np.float32)
+        self.updates = 0
+
+    def update(self, frame: np.ndarray, model: ColourModel,
+               keep_out: list[tuple[np.ndarray, np.ndarray, int]]) -> None:
+        """Learn from a frame everywhere but where the sponge is.
+
+        Parameters
+        ----------
+        frame : ndarray
+            The camera's frame, BGR uint8, full resolution.
+        model : ColourModel
+            The sponge's colour.
+        keep_out : list of (mask, origin (2,), step)
+            Where the sponge is: bool masks of canvas windows (pixel (i, j) at canvas
+            ``origin + step (j, i)``), grown by a pixel of the background.
+        """
+        small = cv2.remap(frame, self.map_u, self.map_v, cv2.INTER_LINEAR,
+                          borderMode=cv2.BORDER_CONSTANT)
+        weight = self.rate * self.in_frame
+        for mask, origin, step in keep_out:
+            x0, y0, x1, y1 = self._bounds(origin, mask.shape, step)
+            if x1 > x0 and y1 > y0:
+                inside = cv2.resize(mask.astype(np.uint8), (x1 - x0, y1 - y0),
+                                    interpolation=cv2.INTER_AREA)
+                inside = cv2.dilate(inside, np.ones((3, 3), np.uint8))
+                weight[y0:y1, x0:x1][inside > 0] = 0.0
+        colour = (model.back_project(small) > 0.5).astype(np.float32)
+        self.image += weight[..., None] * (small.astype(np.float32) - self.image)
+        self.colour += weight * (colour - self.colour)
+        self.seen += weight * (1.0 - self.seen)
+        self.updates += 1
+        # what windows read: the background's colours and where a still thing of the
+        # sponge's colour is
+        seen = np.maximum(self.seen, 1e-6)
+        self.mean = np.clip(self.image / seen[..., None], 0, 255).astype(np.uint8)
+        self.still = ((self.seen > 0.3) & (self.colour > 0.5 * seen)).astype(np.uint8)
+
+    def _bounds(self, origin, shape, step) -> tuple[int, int, int, int]:
+        """Background pixels covering a canvas window."""
+        height, width = shape[:2]
+        x0 = max(int(np.floor(origin[0] * self.scale)), 0)
+        y0 = max(int(np.floor(origin[1] * self.scale)), 0)
+        x1 = min(int(np.ceil((origin[0] + width * step) * self.scale)), self.size[0])
+        y1 = min(int(np.ceil((origin[1] + height * step) * self.scale)), self.size[1])
+        return x0, y0, x1, y1
+
+    def still_colour(self, window: np.ndarray, origin: np.ndarray, step: int
+                     ) -> np.ndarray | None:
+        """Pixels of a canvas window (BGR uint8, pixel (i, j) at canvas
+        ``origin + step (j, i)``) where a still thing of the sponge's colour shows as it
+        always did: bool, window shape; None when there is no such thing in the window."""
+        if not self.updates:
+            return None
+        x0, y0, x1, y1 = self._bounds(origin, window.shape, step)
+        if x1 <= x0 or y1 <= y0 or not self.still[y0:y1, x0:x1].any():
+            return None
+        height, width = window.shape[:2]
+        s = self.scale
+        transform = np.array([[step * s, 0.0, (origin[0] + 0.5) * s - 0.5],
+                              [0.0, step * s, (origin[1] + 0.5) * s - 0.5]], np.float32)
+        flags = cv2.WARP_INVERSE_MAP | cv2.INTER_LINEAR
+        still = cv2.warpAffine(self.still, transform, (width, height),
+                               flags=cv2.WARP_INVERSE_MAP | cv2.INTER_NEAREST)
+        background = cv2.warpAffine(self.mean, transform, (width, height), flags=flags,
+                                    borderMode=cv2.BORDER_REPLICATE)
+        difference = cv2.absdiff(window, background)
+        b, g, r = cv2.split(difference)
+        largest = cv2.max(cv2.max(b, g), r)
+        return (still > 0) & (largest < self.difference)

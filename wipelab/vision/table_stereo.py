@@ -1,0 +1,135 @@
+"""The table top's plane from dense stereo around the sponge.
+
+The sponge's own stereo points fix its plane of motion poorly: each camera sees a
+different part of it, and the difference changes across the image (a 1.8 degree tilt on
+synth's demo). The table around it is textured (wood grain, stone, cloth) and flat: dense
+block matching of a rectified frame pair (``cv2.StereoSGBM``) gives tens of thousands of
+table points, and a robust plane through those near the sponge fixes the normal to a few
+hundredths of a degree. Image scale and disparity range are chosen from the sponge's
+depth, so that wide baselines, big images and vertical stereo pairs all work.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from wipelab.vision.calibration import StereoCalibration
+from wipelab.vision.table_plane import Plane, fit_plane
+
+#: The table points used lie between these factors of the sponge's depth.
+DEPTH_RANGE = (0.6, 1.8)
+#: Most disparity levels searched (the images are scaled down to fit).
+MAX_DISPARITIES = 96
+#: Fewest table points for a plane.
+MIN_POINTS = 500
+
+
+class TableStereo:
+    """Rectification of a calibrated pair, and the table plane near a point.
+
+    Parameters
+    ----------
+    calibration : StereoCalibration
+    """
+
+    def __init__(self, calibration: StereoCalibration):
+        self.calibration = calibration
+        size = calibration.image_size
+        R1, R2, P1, P2, *_ = cv2.stereoRectify(
+            calibration.K1, calibration.D1, calibration.K2, calibration.D2, size,
+            calibration.R, calibration.T.reshape(3, 1).astype(np.float64), alpha=0)
+        self.R1, self.R2, self.P1, self.P2 = R1, R2, P1, P2
+        self.vertical = abs(P2[1, 3]) > abs(P2[0, 3])
+        axis = 1 if self.vertical else 0
+        # disparity = f * baseline / depth, positive when the second image is displaced the
+        # usual way; otherwise the images swap roles
+        self.swap = P2[axis, 3] > 0
+        self.focal = float(P1[0, 0])
+        self.baseline = abs(float(P2[axis, 3])) / self.focal
+
+    def _maps(self, scale: float) -> list[tuple[np.ndarray, np.ndarray]]:
+        c = self.calibration
+        width, height = c.image_size
+        size = (max(16, int(round(width * scale))), max(16, int(round(height * scale))))
+        maps = []
+        for K, D, R, P in ((c.K1, c.D1, self.R1, self.P1), (c.K2, c.D2, self.R2, self.P2)):
+            P = P.copy()
+            P[:2] *= scale
+            maps.append(cv2.initUndistortRectifyMap(K, D, R, P, size, cv2.CV_32FC1))
+        return maps
+
+    def table_points(self, left: np.ndarray, right: np.ndarray, near: np.ndarray) -> np.ndarray:
+        """3D points (n, 3), left optical frame, of the surfaces seen around ``near`` (3,)
+        (left optical frame) by dense block matching of one frame pair (BGR uint8)."""
+        depth = float((self.R1 @ near)[2])
+        if depth <= 0:
+            return np.zeros((0, 3))
+        d_low = self.focal * self.baseline / (DEPTH_RANGE[1] * depth)
+        d_high = self.focal * self.baseline / (DEPTH_RANGE[0] * depth)
+        scale = min(1.0, MAX_DISPARITIES / max(d_high - d_low, 1e-6),
+                    800.0 / max(self.calibration.image_size))
+        images = [cv2.remap(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), mx, my, cv2.INTER_LINEAR)
+                  for frame, (mx, my) in zip((left, right), self._maps(scale))]
+        if self.vertical:
+            images = [np.ascontiguousarray(image.T) for image in images]
+        first, second = images[::-1] if self.swap else images
+        minimum = int(np.floor(d_low * scale))
+        count = int(np.ceil((d_high - d_low) * scale / 16.0 + 1)) * 16
+        block = 5
+        matcher = cv2.StereoSGBM_create(
+            minDisparity=minimum, numDisparities=count, blockSize=block,
+            P1=8 * block * block, P2=32 * block * block, uniquenessRatio=10,
+            speckleWindowSize=100, speckleRange=2, mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY)
+        disparity = matcher.compute(first, second).astype(np.float32) / 16.0
+        rows, columns = np.nonzero(disparity >= minimum)  # unmatched pixels read minimum - 1
+        d = disparity[rows, columns].astype(np.float64)
+        if self.swap:
+            # the map is the right camera's: its pixel (u, v) matches (u - d, v) in the left
+            columns = columns - d
+        if self.vertical:
+            rows, columns = columns, rows
+        f = self.focal * scale
+        cx, cy = self.P1[0, 2] * scale, self.P1[1, 2] * scale
+        z = f * self.baseline / d
+        rectified = np.column_stack([(columns - cx) * z / f, (rows - cy) * z / f, z])
+        points = rectified @ self.R1  # R1 maps left optical to rectified: x_rect = R1 x
+        return points
+
+    def plane_near(self, pairs: list[tuple[np.ndarray, np.ndarray]], near: np.ndarray,
+                   radius: float, seed: int = 0) -> Plane | None:
+        """The dominant plane of the surfaces within ``radius`` (metres) of ``near`` (3,),
+        seen in one or more frame pairs; its normal points towards the cameras. None when
+        too few points match (a plain, untextured table)."""
+        points = np.concatenate([self.table_points(left, right, near) for left, right in pairs])
+        points = points[np.linalg.norm(points - near, axis=1) < radius]
+        if len(points) < MIN_POINTS:
+            return None
+        inliers = ransac_plane(points, tolerance=0.004 * float(np.linalg.norm(near)),
+                               rng=np.random.default_rng(seed))
+        if inliers.sum() < MIN_POINTS:
+            return None
+        return fit_plane(points[inliers], towards=np.zeros(3))
+
+
+def ransac_plane(points: np.ndarray, tolerance: float, rng: np.random.Generator,
+                 trials: int = 200) -> np.ndarray:
+    """Inliers (bool (n,)) of the plane through three of ``points`` (n, 3) that has the most
+    points within ``tolerance`` metres."""
+    sample = points if len(points) <= 20000 else points[rng.choice(len(points), 20000,
+                                                                    replace=False)]
+    best_count, best_plane = 0, None
+    for _ in range(trials):
+        a, b, c = sample[rng.choice(len(sample), 3, replace=False)]
+        normal = np.cross(b - a, c - a)
+        length = np.linalg.norm(normal)
+        if length < 1e-9:
+            continue
+        normal /= length
+        count = int(np.count_nonzero(np.abs((sample - a) @ normal) < tolerance))
+        if count > best_count:
+            best_count, best_plane = count, (normal, a)
+    if best_plane is None:
+        return np.zeros(len(points), bool)
+    normal, a = best_plane
+    return np.abs((points - a) @ normal) < tolerance
