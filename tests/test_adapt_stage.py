@@ -10,6 +10,7 @@ from mcap.reader import make_reader
 
 from wipelab.cli import cli
 from wipelab.learning import PeriodicModel
+from wipelab.logs import read_mcap_scalars, read_mcap_topic
 from wipelab.stages.adapt import AdaptParams, run_adapt
 from wipelab.stages.replay import ReplayParams, run_replay
 
@@ -56,16 +57,27 @@ def test_adapt_logs_read_back(adapted):
         summary = reader.get_summary()
         topics = {c.topic for c in summary.channels.values()}
         schemas = {s.name for s in summary.schemas.values()}
-    assert {"/tf", "/robot/joint_states/position", "/adapt/wrench", "/adapt/height",
-            "/adapt/force_norm", "/adapt/contact", "/adapt/tcp_commanded", "/adapt/tcp_actual",
-            "/adapt/force_arrow", "/adapt/learned_profile", "/adapt/segment"} <= topics
+    assert {"/tf", "/robot/joint_states/position", "/adapt/wrench", "/adapt/tcp_height",
+            "/adapt/contact_height", "/adapt/force_norm", "/adapt/contact", "/adapt/tcp_commanded",
+            "/adapt/tcp_actual", "/adapt/force_arrow", "/adapt/learned_profile", "/adapt/profile",
+            "/adapt/segment", "/adapt/events", "/robot/body", "/robot/sponge"} <= topics
     assert {"foxglove.FrameTransforms", "foxglove.PoseInFrame"} <= schemas
     from rerun.chunk import RrdReader
 
     entities = {chunk.to_record_batch().schema.metadata[b"rerun:entity_path"].decode()
                 for chunk in RrdReader(out / "adapt.rrd").stream()}
-    assert {"/adapt/height", "/adapt/force_norm", "/robot/sponge", "/tf_static"} <= entities
+    assert {"/adapt/tcp_height", "/adapt/force_norm", "/robot/sponge", "/tf_static"} <= entities
     assert any(e.startswith("/armar3b/") for e in entities)      # the robot from the URDF
+    # the F/T calibration records nothing: it is named, and the series break there
+    states = [m["state"] for _, m in read_mcap_topic(out / "adapt.mcap", "/adapt/segment")]
+    assert states[:4] == ["approach", "F/T calibration", "approach", "learning"]
+    t, force, _ = read_mcap_scalars(out / "adapt.mcap", "/adapt/force_norm")
+    gap = np.argmax(np.diff(t))
+    assert np.isnan(force[gap]).all() and not np.isnan(force[gap + 1]).any()
+    profiles = [m for _, m in read_mcap_topic(out / "adapt.mcap", "/adapt/profile")]
+    assert [m["period"] for m in profiles] == list(range(1, len(profiles) + 1))
+    last = np.array(profiles[-1]["learned_mm"]) - np.array(profiles[-1]["surface_mm"])
+    assert np.sqrt(np.nanmean(last ** 2)) < 3.0       # the learned profile is the surface
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["stage"] == "adapt" and "model" in manifest["inputs"]
 
@@ -90,6 +102,16 @@ def test_replay_holds_the_force_where_the_baseline_does_not(adapted, tmp_path):
     for run in (at1["learned+compliance"], at3["learned+compliance"]):
         assert run["contact_fraction"] >= 0.99 and run["peak_force_n"] <= 30.0
     assert at1["planar"]["rms_force_error_n"] > 3 * at1["learned+compliance"]["rms_force_error_n"]
+    # |F| over the phase, one curve per speed and mode, in the logs
+    curves = {mode: [m for _, m in read_mcap_topic(tmp_path / "replay" / "replay.mcap",
+                                                   f"/replay/force_by_phase/{mode}")]
+              for mode in ("learned_compliance", "planar")}
+    for mode_curves in curves.values():
+        assert [m["scale"] for m in mode_curves] == [1.0, 3.0]
+        assert [m["frequency_hz"] for m in mode_curves] == pytest.approx(
+            [metrics["base_frequency_hz"], 3 * metrics["base_frequency_hz"]])
+    for curve in curves["learned_compliance"]:
+        assert np.nanmean(np.array(curve["force_n"], dtype=float)) == pytest.approx(10.0, abs=1.5)
 
 
 def _invoke(*args):

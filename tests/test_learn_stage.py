@@ -61,7 +61,8 @@ def test_learn_logs_figures_4_and_5_to_mcap_and_rerun(demo, learned):
     mcap, rrd = learned / "learn.mcap", learned / "learn.rrd"
     topics = mcap_topics(mcap)
     expected = {"/input/trajectory", "/oscillators/frequency_hz", "/oscillators/fundamental_hz",
-                "/dmp/x/waveform", "/dmp/y/waveform", "/dmp/x/weights", "/dmp/y/weights", "/model"}
+                "/dmp/x/waveform", "/dmp/y/waveform", "/dmp/x/weights", "/dmp/y/weights",
+                "/dmp/x/period", "/dmp/y/period", "/model"}
     assert expected <= set(topics)
     assert topics["/dmp/x/waveform"]["schema"] == "wipelab.Scalars"
     assert topics["/input/trajectory"]["message_count"] == t.size
@@ -80,7 +81,12 @@ def test_learn_logs_figures_4_and_5_to_mcap_and_rerun(demo, learned):
     rrd_t, rrd_fundamental = read_rrd_scalars(rrd, "/oscillators/fundamental_hz")
     np.testing.assert_allclose(rrd_fundamental[:, 0], fundamental[:, 0])
     views = rrd_blueprint_views(rrd)
-    assert ("TimeSeries", "/oscillators") in views and ("TimeSeries", "/dmp/y/weights") in views
+    assert {("TimeSeries", "/oscillators"), ("TimeSeries", "/dmp/y/waveform"),
+            ("2D", "/dmp/y/period")} <= set(views)
+    # the last learned period over the phase is the model's waveform
+    (_, last), = read_mcap_topic(mcap, "/dmp/y/period")[-1:]
+    model = PeriodicModel.from_dict(json.loads((learned / "model.json").read_text()))
+    np.testing.assert_allclose(last["learned"], model.waveform(last["phase_rad"])[:, 1], atol=1e-9)
     manifest = json.loads((learned / "manifest.json").read_text())
     assert manifest["stage"] == "learn" and manifest["inputs"]["trajectory"]["sha256"] == sha256_file(path)
 

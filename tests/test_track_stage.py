@@ -11,6 +11,8 @@ from click.testing import CliRunner
 from wipelab.cli import cli
 from wipelab.logs import mcap_attachments, mcap_topics, read_mcap_scalars, rrd_column
 from wipelab.trajectory_csv import read_trajectory
+from wipelab.vision.calibration import load_calibration
+from wipelab.vision.projection import invert_transform
 from wipelab.vision.video_io import H264Writer
 
 
@@ -53,6 +55,8 @@ def test_track_writes_csv_logs_and_manifest(demo, tracked):
                           ("/stereo/right/calibration", "foxglove.CameraCalibration"),
                           ("/tf", "foxglove.FrameTransforms"),
                           ("/track/particles", "foxglove.PointCloud"),
+                          ("/track/sponge", "foxglove.SceneUpdate"),
+                          ("/stereo/left/overlay", "foxglove.ImageAnnotations"),
                           ("/track/position", "wipelab.Scalars")]:
         assert topics[topic]["schema"] == schema
     assert topics["/stereo/left/video"]["message_count"] == len(track.t)
@@ -61,9 +65,18 @@ def test_track_writes_csv_logs_and_manifest(demo, tracked):
     np.testing.assert_allclose(xyz, track.array(["x", "y", "z"])[valid], atol=1e-5)
     assert "calibration.yaml" in mcap_attachments(tracked / "track.mcap")
 
-    times, points = rrd_column(tracked / "track.rrd", "/stereo/left/overlay/particles",
+    times, points = rrd_column(tracked / "track.rrd", "/stereo/left/overlay",
                                "Points2D:positions")
     assert len(times) == len(track.t) and len(points[0]) > 0
+    # the sponge box drawn over the image: 12 edges around where the tracked centre projects
+    _, edges = rrd_column(tracked / "track.rrd", "/stereo/left/overlay", "LineStrips2D:strips")
+    first = int(np.flatnonzero(valid)[0])
+    assert len(edges[first]) == 12
+    corners = np.array(edges[first]).reshape(-1, 2)
+    calibration = load_calibration(demo / "calibration.yaml")
+    T_left_world = invert_transform(calibration.T_track_left)
+    centre = calibration.left.project(T_left_world[:3, :3] @ xyz[0] + T_left_world[:3, 3]) + 0.5
+    assert (corners.min(axis=0) < centre).all() and (centre < corners.max(axis=0)).all()
     manifest = json.loads((tracked / "manifest.json").read_text())
     assert manifest["stage"] == "track"
     assert set(manifest["inputs"]) == {"calibration", "left_video", "right_video"}

@@ -14,6 +14,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from wipelab.logs import StageRecorder
+from wipelab.logs.phase_chart import PhaseChart
 
 FRAMES = 20
 FPS = 10.0
@@ -41,6 +42,12 @@ POINTS = np.random.default_rng(0).normal(size=(30, 3))
 STRIP = np.stack([np.linspace(0, 1, 12), np.zeros(12), np.linspace(0, 0.5, 12)], axis=1)
 QUAT = np.array([0.0, 0.0, np.sin(0.25), np.cos(0.25)])
 PARAMETERS = {"kernels": 25, "mode": "online", "dofs": ["x", "y"], "lambda": 0.99}
+PHASE = np.linspace(0.0, 2 * np.pi, 9)
+CHART = PhaseChart.fitting(np.sin(PHASE), "y (m)")
+LINES = np.array([[[10.0, 20.0], [30.0, 40.0]], [[30.0, 40.0], [50.0, 20.0]]])
+SHAPES = [("robot/hand", "hand", [("box", [0.1, 0.0, 0.0], QUAT, [0.1, 0.07, 0.05], [90, 90, 90, 255]),
+                                  ("sphere", [0.0, 0.0, 0.0], [0, 0, 0, 1], [0.05, 0.05, 0.05],
+                                   [200, 200, 200, 255])])]
 BLUEPRINT = rrb.Blueprint(rrb.Horizontal(rrb.Spatial3DView(origin="/", name="scene"),
                                          rrb.TimeSeriesView(origin="/oscillators", name="frequencies")))
 
@@ -64,6 +71,15 @@ def write_everything(directory: Path, h264_clip: Path, jpeg_bytes: bytes, input_
         rec.json("/model/learned", 2.0, {"weights": np.arange(3.0), "frequency_hz": 1.5},
                  schema_name="wipelab.Model",
                  schema={"type": "object", "properties": {"weights": {"type": "array"}}})
+        rec.box3d("/robot/sponge", 0.5, [0.1, 0.07, 0.04], [0.6, 0.1, 0.85], QUAT, frame_id="hand")
+        rec.box3d("/robot/sponge", 0.6, [0.1, 0.07, 0.04], None, frame_id="hand")
+        rec.shapes("/robot/body", 0.0, SHAPES)
+        rec.image_overlay("/stereo/left/overlay", 0.2, "left_optical", LINES, [[5.0, 6.0]])
+        rec.events("/adapt/events", [0.0, 1.0], ["approach", "learning"])
+        rec.states("/adapt/segment", [0.0, 1.0], ["approach", "learning"],
+                   {"approach": (120, 120, 120), "learning": (70, 150, 230)})
+        rec.phase_curves("/adapt/profile", 1.0, CHART, PHASE, {"learned_m": np.sin(PHASE)},
+                         {"learned_m": (235, 90, 60)}, extra={"period": 1})
         rec.rerun.set_time("time", duration=1.5)
         rec.rerun.log("/custom/note", rr.TextLog("stage-specific record"))
     return rec

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from mcap.reader import make_reader
 
-from logs_testdata import (FPS, FRAMES, D, K, PARAMETERS, POINTS, QUAT, SERIES, SERIES_T,
-                                 STRIP)
-from wipelab.logs import (mcap_attachments, mcap_input_hashes, mcap_metadata, mcap_parameters,
+from logs_testdata import (CHART, FPS, FRAMES, LINES, PHASE, D, K, PARAMETERS, POINTS, QUAT,
+                           SERIES, SERIES_T, STRIP)
+from wipelab.logs import (StageRecorder, mcap_attachments, mcap_input_hashes, mcap_metadata, mcap_parameters,
                           mcap_topics, point_cloud_points, read_mcap_scalars, read_mcap_topic,
                           read_rrd_scalars, rrd_blueprint_views, rrd_column)
 from wipelab.manifest import sha256_file
@@ -30,6 +30,12 @@ def test_topics_use_foxglove_schemas_under_their_exact_names(recording):
         "/stereo/left/image": "foxglove.CompressedImage",
         "/stereo/left/video": "foxglove.CompressedVideo",
         "/model/learned": "wipelab.Model",
+        "/robot/sponge": "foxglove.SceneUpdate",
+        "/robot/body": "foxglove.SceneUpdate",
+        "/stereo/left/overlay": "foxglove.ImageAnnotations",
+        "/adapt/events": "foxglove.Log",
+        "/adapt/segment": "wipelab.State",
+        "/adapt/profile": "wipelab.PhaseCurves",
     }
     for d in topics.values():
         json_channel = d["schema"].startswith("wipelab.")
@@ -201,3 +207,64 @@ def test_reading_a_missing_topic_gives_nothing(recording, missing):
     assert read_mcap_topic(recording.mcap_path, missing) == []
     with pytest.raises(KeyError, match="/nope"):
         read_mcap_scalars(recording.mcap_path, missing)
+
+
+def test_box_round_trip_and_removal(recording):
+    (_, drawn), (_, removed) = read_mcap_topic(recording.mcap_path, "/robot/sponge")
+    (entity,) = drawn["entities"]
+    (cube,) = entity["cubes"]
+    assert entity["frame_id"] == "hand" and entity["frame_locked"] and entity["id"] == "/robot/sponge"
+    assert [cube["size"][a] for a in "xyz"] == pytest.approx([0.1, 0.07, 0.04])
+    assert [cube["pose"]["position"][a] for a in "xyz"] == pytest.approx([0.6, 0.1, 0.85])
+    assert removed["entities"] == [] and removed["deletions"][0]["id"] == "/robot/sponge"
+    t, half_sizes = rrd_column(recording.rrd_path, "/robot/sponge", "Boxes3D:half_sizes")
+    assert t.tolist() == [0.5, 0.6]
+    assert half_sizes[0] == [pytest.approx([0.05, 0.035, 0.02])] and half_sizes[1] == []
+
+
+def test_shapes_are_frame_locked_entities(recording):
+    (_, update), = read_mcap_topic(recording.mcap_path, "/robot/body")
+    (entity,) = update["entities"]
+    assert (entity["id"], entity["frame_id"], entity["frame_locked"]) == ("robot/hand", "hand", True)
+    assert len(entity["cubes"]) == 1 and len(entity["spheres"]) == 1
+    assert entity["cubes"][0]["color"]["r"] == pytest.approx(90 / 255)
+
+
+def test_image_overlay_round_trip(recording):
+    (_, annotations), = read_mcap_topic(recording.mcap_path, "/stereo/left/overlay")
+    lines, points = annotations["points"]
+    assert lines["type"] == "LINE_LIST" and points["type"] == "POINTS"
+    assert [(p["x"], p["y"]) for p in lines["points"]] == [(10, 20), (30, 40), (30, 40), (50, 20)]
+    _, strips = rrd_column(recording.rrd_path, "/stereo/left/overlay", "LineStrips2D:strips")
+    assert np.array(strips[0]).tolist() == LINES.tolist()
+
+
+def test_events_are_foxglove_logs_and_rerun_text_logs(recording):
+    messages = read_mcap_topic(recording.mcap_path, "/adapt/events")
+    assert [(ns, m["message"], m["level"], m["name"]) for ns, m in messages] == [
+        (0, "approach", "INFO", "learn"), (1_000_000_000, "learning", "INFO", "learn")]
+    t, text = rrd_column(recording.rrd_path, "/adapt/events", "TextLog:text")
+    assert t.tolist() == [0.0, 1.0] and text == [["approach"], ["learning"]]
+
+
+def test_states_round_trip(recording):
+    assert [(ns, m) for ns, m in read_mcap_topic(recording.mcap_path, "/adapt/segment")] == [
+        (0, {"state": "approach"}), (1_000_000_000, {"state": "learning"})]
+    t, states = rrd_column(recording.rrd_path, "/adapt/segment", "StateChange:state")
+    assert t.tolist() == [0.0, 1.0] and states == [["approach"], ["learning"]]
+
+
+def test_phase_curves_round_trip(recording):
+    (_, message), = read_mcap_topic(recording.mcap_path, "/adapt/profile")
+    assert message["period"] == 1
+    np.testing.assert_allclose(message["phase_rad"], PHASE)
+    np.testing.assert_allclose(message["learned_m"], np.sin(PHASE))
+    _, strips = rrd_column(recording.rrd_path, "/adapt/profile", "LineStrips2D:strips")
+    np.testing.assert_allclose(np.array(strips[0][0]), CHART.to_chart(PHASE, np.sin(PHASE)),
+                               rtol=1e-6)
+
+
+@pytest.mark.parametrize("names", [["measured |F|"], ["true contact"], ["a.b"]])
+def test_series_names_must_be_plottable_in_foxglove(tmp_path, names):
+    with StageRecorder(tmp_path, "x") as rec, pytest.raises(ValueError, match="letters, digits"):
+        rec.scalars("/a/b", np.arange(2.0), np.arange(2.0), names=names)

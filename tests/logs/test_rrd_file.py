@@ -49,3 +49,43 @@ def test_row_ids_keep_the_logging_order_across_chunks(tmp_path):
         ids = [int.from_bytes(row_id, "big") for row_id in batch.column("rerun.controls.RowId").to_pylist()]
         rows += zip(ids, [t[0] for t in batch.column("TextLog:text").to_pylist()])
     assert [text for _, text in sorted(rows)] == ["a", "b", "c"]
+
+
+def _eye_and_override_layout():
+    import rerun as rr
+
+    return rrb.Blueprint(rrb.Horizontal(
+        rrb.Spatial3DView(origin="/", eye_controls=rrb.EyeControls3D(
+            position=[1.0, 2.0, 3.0], look_target=[0.0, 0.0, 0.0], eye_up=[0.0, 0.0, 1.0])),
+        rrb.TimeSeriesView(origin="/a", overrides={
+            "/a": rr.SeriesLines.from_fields(visible_series=[True, False])})))
+
+
+def test_stored_layout_keeps_rerun_encodings_and_is_reproducible(tmp_path):
+    """The viewer drops a default layout whose nested fields lost their non-null flags (a
+    deep copy of the blueprint did that), and visualizer overrides get random ids."""
+    import rerun as rr
+    from rerun.chunk import RrdReader
+
+    from wipelab.logs import StageRecorder
+
+    files = []
+    for name in ("a", "b"):
+        (tmp_path / name).mkdir()
+        with StageRecorder(tmp_path / name, "x", blueprint=_eye_and_override_layout()) as rec:
+            rec.scalars("/a", [0.0, 1.0], [[1.0, 2.0], [3.0, 4.0]], names=["u", "v"])
+        files.append(tmp_path / name / "x.rrd")
+    assert files[0].read_bytes() == files[1].read_bytes()
+    direct = rr.RecordingStream("x", recording_id="direct")
+    direct.save(tmp_path / "direct.rrd", default_blueprint=_eye_and_override_layout())
+    direct.flush()
+    direct.disconnect()
+
+    def eye_type(path):
+        reader = RrdReader(path)
+        return {str(field.type) for store in reader.blueprints()
+                for chunk in reader.stream(store=store).to_chunks()
+                for field in chunk.to_record_batch().schema if field.name.startswith("EyeControls3D:")}
+
+    assert eye_type(files[0]) == eye_type(tmp_path / "direct.rrd")
+    assert "float not null" in next(iter(eye_type(files[0])))

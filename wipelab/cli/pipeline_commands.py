@@ -151,35 +151,35 @@ def synth_dataset(out_dir: Path, patterns: tuple[str, ...], frequencies_hz: tupl
 
 @click.command("view")
 @click.argument("path", type=PATH)
-@click.option("--separate", is_flag=True,
-              help="Open each stage's recording on its own instead of one joined recording.")
 @click.option("--save", type=OUTPUT_FILE, default=None,
-              help="Write the joined recording (all stages, one timeline) to this .rrd and exit.")
+              help="Write all the recordings (each stage's, with its layout) into this one .rrd "
+                   "and exit.")
 @click.option("--web", is_flag=True, help="Serve a web viewer instead (works without a display).")
+@click.option("--port", type=click.IntRange(1, 65535), default=None,
+              help="Port of the viewer's server [default: Rerun's, 9876; a viewer already "
+                   "listening there gets the recordings].")
+@click.option("--web-port", type=click.IntRange(1, 65535), default=None,
+              help="With --web: port of the web page [default: Rerun's, 9090].")
 @click.pass_context
-def view(ctx: click.Context, path: Path, separate: bool, save: Path | None, web: bool) -> None:
+def view(ctx: click.Context, path: Path, save: Path | None, web: bool, port: int | None,
+         web_port: int | None) -> None:
     """Open the Rerun recordings (.rrd) of a run directory, stage folder or file.
 
-    By default all stages are joined into one recording, so that they share the data-time
-    timeline. Without a display it says how to open them instead.
+    Every stage opens as a recording of its own, with its own layout and clock, in one
+    viewer (its left panel lists them). The native viewer plays the stereo videos with the
+    `ffmpeg` program. Without a display it says how to open them instead.
     """
-    import subprocess
-    import tempfile
-
     from wipelab.pipeline.recordings import (find_recordings, has_display, how_to_open,
-                                             join_recordings, viewer_argv)
+                                             run_program, save_recordings, terminated_as_exit,
+                                             viewer_argv)
 
     recordings = find_recordings(path)
-    if save is not None:
-        join_recordings(recordings, save)
-        click.echo(f"wrote {save}: {len(recordings)} recording(s) joined into one")
-        return
-    if not web and not has_display():
-        click.echo(how_to_open(recordings, path))
-        return
-    with tempfile.TemporaryDirectory(prefix="wipelab-view-") as tmp:
-        if not separate and len(recordings) > 1:
-            recordings = [join_recordings(recordings, Path(tmp) / "run.rrd")]
-        code = subprocess.run(viewer_argv(recordings, web=web)).returncode
-    ctx.exit(code)
-
+    with terminated_as_exit():
+        if save is not None:
+            save_recordings(recordings, save)
+            click.echo(f"wrote {save}: {len(recordings)} recording(s)")
+            return
+        if not web and not has_display():
+            click.echo(how_to_open(recordings, path))
+            return
+        ctx.exit(run_program(viewer_argv(recordings, web=web, port=port, web_port=web_port)))

@@ -28,27 +28,34 @@ Naming scheme
 * **MCAP schemas.** Foxglove's well-known protobuf schemas under their exact names where
   one fits: ``foxglove.FrameTransforms`` (``/tf``), ``foxglove.PoseInFrame``,
   ``foxglove.CameraCalibration``, ``foxglove.CompressedImage``, ``foxglove.CompressedVideo``,
-  ``foxglove.PointCloud`` (points), ``foxglove.SceneUpdate`` (line strips, arrows; entity id
-  = topic). Everything else is JSON (message encoding ``json``) with a named JSON Schema
-  (schema encoding ``jsonschema``): ``wipelab.Scalars`` for time series (one message per
-  time stamp, ``{name: value}``, so Foxglove plots ``/topic.name``) and stage-specific
+  ``foxglove.PointCloud`` (points), ``foxglove.SceneUpdate`` (line strips, arrows, boxes and
+  other solids on frames; entity id = topic unless given), ``foxglove.ImageAnnotations``
+  (drawings over a camera's images), ``foxglove.Log`` (events). Everything else is JSON
+  (message encoding ``json``) with a named JSON Schema (schema encoding ``jsonschema``):
+  ``wipelab.Scalars`` for time series (one message per time stamp, ``{name: value}``, names
+  of ``[A-Za-z0-9_]`` so that Foxglove plots ``/topic.name``), ``wipelab.State`` (a state
+  per change), ``wipelab.PhaseCurves`` (curves over one period) and stage-specific
   ``wipelab.*`` names. Chunks are ZSTD-compressed and indexed (chunk and message indexes,
   statistics, summary offsets). Metadata records: ``wipelab.stage`` (stage, recording
   id), ``wipelab.parameters`` (one key per parameter, JSON value) and ``wipelab.inputs``
   (``<role>.sha256``, ``<role>.file``). Attachments hold files such as calibrations.
-* **Rerun recordings** have application id ``wipelab`` and a recording id derived from the
-  stage, its parameters and input hashes; they open with the stage's default blueprint.
+* **Rerun recordings** have application id ``wipelab_<stage>`` (the viewer keeps one layout
+  per application id, so stages opened together keep theirs) and a recording id derived
+  from the stage, its parameters and input hashes; they open with the stage's default
+  blueprint. Quantities over the phase of the movement are drawn as charts in 2D views
+  (:mod:`wipelab.logs.phase_chart`); colours come from :mod:`wipelab.logs.palette`.
 """
 
 from wipelab.logs.reader import (mcap_attachments, mcap_input_hashes, mcap_metadata,
                                  mcap_parameters, mcap_topics, point_cloud_points,
                                  read_mcap_scalars, read_mcap_topic, read_rrd_scalars,
                                  rrd_blueprint_views, rrd_column, rrd_record_batches)
-from wipelab.logs.recorder import (APPLICATION_ID, TF_TOPIC, TIMELINE, WORLD_FRAME, StageRecorder,
-                                   default_blueprint)
+from wipelab.logs.recorder import (TF_TOPIC, TIMELINE, WORLD_FRAME, StageRecorder, application_id,
+                                   default_blueprint, stage_panels, whole_run)
 
 __all__ = [
-    "APPLICATION_ID", "TF_TOPIC", "TIMELINE", "WORLD_FRAME", "StageRecorder", "default_blueprint",
+    "TF_TOPIC", "TIMELINE", "WORLD_FRAME", "StageRecorder", "application_id", "default_blueprint",
+    "stage_panels", "whole_run",
     "mcap_attachments", "mcap_input_hashes", "mcap_metadata", "mcap_parameters", "mcap_topics",
     "point_cloud_points", "read_mcap_scalars", "read_mcap_topic", "read_rrd_scalars",
     "rrd_blueprint_views", "rrd_column", "rrd_record_batches",

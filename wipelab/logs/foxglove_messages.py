@@ -150,6 +150,76 @@ def _scene_update(ns: int, frame_id: str, entity_id: str, **primitives) -> fm.Sc
     return fm.SceneUpdate(entities=[entity])
 
 
+#: Kinds of solid: their Foxglove primitive and the ``SceneEntity`` field that lists them.
+SHAPE_PRIMITIVES = {"box": (fm.CubePrimitive, "cubes"),
+                    "cylinder": (fm.CylinderPrimitive, "cylinders"),
+                    "sphere": (fm.SpherePrimitive, "spheres")}
+
+
+def shape_primitive(kind: str, translation, q_xyzw, size, rgba):
+    """A ``foxglove.CubePrimitive`` / ``CylinderPrimitive`` / ``SpherePrimitive``.
+
+    ``kind`` is "box", "cylinder" (axis along its z) or "sphere"; ``size`` (3,) the extent
+    of its bounding box along its own axes (m), ``translation`` (3,) and ``q_xyzw`` (4,) its
+    pose in the entity's frame, ``rgba`` (4,) uint8.
+    """
+    primitive, _ = SHAPE_PRIMITIVES[kind]
+    return primitive(pose=pose(translation, q_xyzw), size=vector3(size), color=color(rgba))
+
+
+def scene_shapes(ns: int, entities) -> fm.SceneUpdate:
+    """A ``foxglove.SceneUpdate`` of solids: ``entities`` is ``[(entity id, frame_id,
+    [(kind, translation, q_xyzw, size, rgba), ...]), ...]`` (see :func:`shape_primitive`).
+
+    The entities are frame-locked: they move with their frame as /tf moves it.
+    """
+    stamp, out = timestamp(ns), []
+    for entity_id, frame_id, shapes in entities:
+        primitives = {group: [] for _, group in SHAPE_PRIMITIVES.values()}
+        for kind, translation, q_xyzw, size, rgba in shapes:
+            primitives[SHAPE_PRIMITIVES[kind][1]].append(shape_primitive(kind, translation, q_xyzw, size, rgba))
+        out.append(fm.SceneEntity(timestamp=stamp, frame_id=frame_id, id=entity_id,
+                                  frame_locked=True, **primitives))
+    return fm.SceneUpdate(entities=out)
+
+
+def scene_deletion(ns: int, entity_id: str) -> fm.SceneUpdate:
+    """A ``foxglove.SceneUpdate`` that removes the entity ``entity_id`` (e.g. a lost sponge)."""
+    return fm.SceneUpdate(deletions=[fm.SceneEntityDeletion(
+        timestamp=timestamp(ns), type=fm.SceneEntityDeletionType.MatchingId, id=entity_id)])
+
+
+#: ``foxglove.Log`` levels by name.
+LOG_LEVELS = {"debug": fm.LogLevel.Debug, "info": fm.LogLevel.Info,
+              "warning": fm.LogLevel.Warning, "error": fm.LogLevel.Error}
+
+
+def log_message(ns: int, level: str, text: str, name: str) -> fm.Log:
+    """A ``foxglove.Log`` (Foxglove's Log panel): ``level`` one of :data:`LOG_LEVELS`,
+    ``name`` the emitting stage."""
+    return fm.Log(timestamp=timestamp(ns), level=LOG_LEVELS[level], message=text, name=name,
+                  file="", line=0)
+
+
+def image_annotations(ns: int, lines: np.ndarray, line_rgba: np.ndarray, points: np.ndarray,
+                      point_rgba: np.ndarray, thickness: float) -> fm.ImageAnnotations:
+    """A ``foxglove.ImageAnnotations``: line segments (m, 2, 2) and points (k, 2) in pixels
+    (origin at the top-left corner of the top-left pixel), colours (4,) uint8."""
+    annotations = []
+    stamp = timestamp(ns)
+    if len(lines):
+        annotations.append(fm.PointsAnnotation(
+            timestamp=stamp, type=fm.PointsAnnotationType.LineList,
+            points=[fm.Point2(x=float(x), y=float(y)) for x, y in np.reshape(lines, (-1, 2))],
+            outline_color=color(line_rgba), thickness=float(thickness)))
+    if len(points):
+        annotations.append(fm.PointsAnnotation(
+            timestamp=stamp, type=fm.PointsAnnotationType.Points,
+            points=[fm.Point2(x=float(x), y=float(y)) for x, y in np.reshape(points, (-1, 2))],
+            outline_color=color(point_rgba), fill_color=color(point_rgba), thickness=3.0))
+    return fm.ImageAnnotations(points=annotations)
+
+
 def scene_line_strip(ns: int, frame_id: str, entity_id: str, points: np.ndarray,
                      rgba: np.ndarray, thickness: float) -> fm.SceneUpdate:
     """A ``foxglove.SceneUpdate`` with one LINE_STRIP through points (n, 3), metres."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import uuid
 from pathlib import Path
 from typing import Any, Sequence
@@ -16,13 +17,15 @@ from foxglove import messages as fm
 
 from wipelab.logs import foxglove_messages as fx
 from wipelab.logs.mcap_log import McapLog, json_bytes, json_ready
+from wipelab.logs.phase_chart import PhaseChart
 from wipelab.logs.rrd_file import capture_stream, deterministic_blueprint, write_canonical_rrd
 from wipelab.logs.timebase import seconds_array_to_ns, seconds_to_ns
 from wipelab.logs.video import access_units
 from wipelab.manifest import sha256_file
 
-#: Rerun application id of every recording.
-APPLICATION_ID = "wipelab"
+#: Rerun application ids are ``wipelab_<stage>``: the viewer keeps one layout per application
+#: id, so each stage's recording opens with its own layout even beside the others.
+APPLICATION_ID_PREFIX = "wipelab_"
 #: The data-time timeline (duration, seconds since the start of the recording).
 TIMELINE = "time"
 #: MCAP topic of all frame transforms; Rerun puts frame ``child`` on entity ``/tf/<child>``.
@@ -40,12 +43,20 @@ POSE_AXIS_LENGTH = 0.1
 
 _RECORDING_NAMESPACE = uuid.UUID("5f0c2a43-9a55-4c39-8d43-2b0f4ab1c7e2")
 _SCALARS_SCHEMA = "wipelab.Scalars"
+_STATE_SCHEMA = "wipelab.State"
+#: Names a Foxglove message path can address (``/topic.name``): letters, digits, underscores.
+PLOTTABLE_NAME = re.compile(r"[A-Za-z0-9_]+")
 
 
 def _checked_topic(topic: str) -> str:
     if not topic.startswith("/") or topic.endswith("/") or "//" in topic:
         raise ValueError(f"topic {topic!r} must look like /a/b (leading '/', no empty parts)")
     return topic
+
+
+def application_id(stage: str) -> str:
+    """Rerun application id of a stage's recordings (``wipelab_<stage>``)."""
+    return APPLICATION_ID_PREFIX + stage
 
 
 def rerun_frame(frame_id: str) -> str:
@@ -59,11 +70,25 @@ def recording_id(stage: str, parameters: dict[str, Any], input_hashes: dict[str,
     return str(uuid.uuid5(_RECORDING_NAMESPACE, key))
 
 
+def stage_panels() -> list:
+    """Panel states of every stage layout: the left panel open (it lists the recordings, one
+    per stage, when several are open), the selection panel hidden, the time panel as a bar."""
+    return [rrb.BlueprintPanel(state="expanded"), rrb.SelectionPanel(state="hidden"),
+            rrb.TimePanel(state="collapsed")]
+
+
+def whole_run() -> rrb.TimeAxis:
+    """A time axis over the whole recording, for time series and state timelines (not a
+    window around the time cursor)."""
+    return rrb.TimeAxis(view_range=rrb.TimeRange(start=rrb.TimeRangeBoundary.infinite(),
+                                                 end=rrb.TimeRangeBoundary.infinite()))
+
+
 def default_blueprint() -> rrb.Blueprint:
     """Layout for a stage that brings none: the 3D scene beside all time series."""
     return rrb.Blueprint(rrb.Horizontal(rrb.Spatial3DView(origin="/", name="scene"),
                                         rrb.TimeSeriesView(origin="/", name="series")),
-                         collapse_panels=True)
+                         *stage_panels())
 
 
 class StageRecorder:
@@ -78,7 +103,7 @@ class StageRecorder:
     Parameters
     ----------
     directory : existing directory to write into.
-    stage : stage name, also the file stem.
+    stage : stage name, also the file stem; the Rerun application id is ``wipelab_<stage>``.
     parameters : the stage's parameters (JSON-serialisable); MCAP metadata
         ``wipelab.parameters`` (one key per parameter, JSON-encoded value).
     inputs : role -> input file; MCAP metadata ``wipelab.inputs`` holds ``<role>.sha256`` and
@@ -102,6 +127,7 @@ class StageRecorder:
                  attachments: dict[str, str | os.PathLike] | None = None):
         directory = Path(directory)
         self.stage = stage
+        self.application_id = application_id(stage)
         self.mcap_path = directory / f"{stage}.mcap"
         self.rrd_path = directory / f"{stage}.rrd"
         self._rrd_part = directory / f"{stage}.rrd.part"
@@ -120,11 +146,12 @@ class StageRecorder:
         layout = deterministic_blueprint(blueprint or default_blueprint(), self.recording_id)
         self._mcap_file = open(self.mcap_path, "wb")  # an unusable directory raises an OSError here
         try:
-            self.rerun = capture_stream(APPLICATION_ID, self.recording_id, self._rrd_part, layout)
+            self.rerun = capture_stream(self.application_id, self.recording_id, self._rrd_part, layout)
         except BaseException:
             self._mcap_file.close()
             self.mcap_path.unlink()
             raise
+        self.rerun.send_recording_name(stage)  # what the viewer lists it as
         self._mcap = McapLog(self._mcap_file)
         self._mcap.metadata(METADATA_STAGE, {"stage": stage, "recording_id": self.recording_id})
         self._mcap.metadata(METADATA_PARAMETERS,
@@ -152,7 +179,8 @@ class StageRecorder:
             self.rerun.flush()
             self.rerun.disconnect()
         try:
-            write_canonical_rrd(self._rrd_part, self.rrd_path, APPLICATION_ID, self.recording_id)
+            write_canonical_rrd(self._rrd_part, self.rrd_path, self.application_id,
+                                self.recording_id)
         finally:
             self._rrd_part.unlink(missing_ok=True)
 
@@ -173,13 +201,16 @@ class StageRecorder:
 
     # -- public logging API ----------------------------------------------------------------
     def scalars(self, topic: str, t: np.ndarray, values: np.ndarray,
-                names: Sequence[str] | None = None) -> None:
+                names: Sequence[str] | None = None, colors=None) -> None:
         """A time series: ``values`` (n, k) or (n,) at times ``t`` (n,) in seconds.
 
         MCAP: JSON channel, schema ``wipelab.Scalars``, one message ``{name: value, ...}``
-        per time stamp (non-finite values as null). Rerun: ``Scalars`` via ``send_columns``,
-        series named by a static ``SeriesLines``. ``names`` default to ``value`` for one
-        column, ``value_0``, ``value_1``, ... otherwise.
+        per time stamp (non-finite values as null), so that Foxglove plots ``/topic.name``.
+        Rerun: ``Scalars`` via ``send_columns``, series named (and coloured) by a static
+        ``SeriesLines``; a non-finite value leaves a gap in the line. ``names`` (letters,
+        digits and ``_`` only: what a Foxglove message path can address) default to
+        ``value`` for one column, ``value_0``, ``value_1``, ... otherwise; ``colors`` (k, 3)
+        uint8, one per series (the viewer picks if None).
         """
         entity = _checked_topic(topic)
         ns = seconds_array_to_ns(t)
@@ -194,6 +225,10 @@ class StageRecorder:
             [f"value_{i}" for i in range(k)] if names is None else [str(n) for n in names]
         if len(names) != k or len(set(names)) != k:
             raise ValueError(f"{topic}: need {k} distinct names, got {names}")
+        unplottable = [n for n in names if not PLOTTABLE_NAME.fullmatch(n)]
+        if unplottable:
+            raise ValueError(f"{topic}: series names may hold only letters, digits and '_' "
+                             f"(Foxglove message paths), got {unplottable}")
         schema = {"title": _SCALARS_SCHEMA, "type": "object",
                   "properties": {n: {"type": ["number", "null"]} for n in names},
                   "required": sorted(names)}
@@ -211,7 +246,9 @@ class StageRecorder:
                 "{" + ",".join(f"{key}:{v!r}" if math.isfinite(v) else f"{key}:null"
                                for key, v in zip(keys, row)) + "}"
             write(channel, time_ns, text.encode())
-        self.rerun.log(entity, rr.SeriesLines(names=names), static=True)
+        style = rr.SeriesLines(names=names) if colors is None else \
+            rr.SeriesLines(names=names, colors=fx.rgba_uint8(colors, k))
+        self.rerun.log(entity, style, static=True)
         self.rerun.send_columns(entity, indexes=[rr.TimeColumn(TIMELINE, duration=ns.astype("timedelta64[ns]"))],
                                 columns=rr.Scalars.columns(scalars=values))
 
@@ -232,17 +269,21 @@ class StageRecorder:
         self.rerun.log(entity, rr.Points3D(points, colors=None if colors is None else rgba, radii=radii))
 
     def line_strip3d(self, topic: str, t: float, points: np.ndarray, color=(255, 255, 255),
-                     thickness: float = 0.002, frame_id: str = WORLD_FRAME) -> None:
+                     thickness: float = 0.002, frame_id: str = WORLD_FRAME,
+                     entity_id: str | None = None) -> None:
         """A polyline through ``points`` (n, 3), metres, at time ``t``; ``thickness`` in metres.
 
-        MCAP: ``foxglove.SceneUpdate`` with one entity (id = topic) holding a LINE_STRIP.
-        Rerun: ``LineStrips3D``.
+        MCAP: ``foxglove.SceneUpdate`` with one entity holding a LINE_STRIP; its id is
+        ``entity_id`` (default: the topic), so a strip replaces the last one with the same
+        id, and strips with ids of their own add up (a path growing piece by piece).
+        Rerun: ``LineStrips3D`` (a layout shows earlier ones with a visible time range).
         """
         entity = _checked_topic(topic)
         points = np.asarray(points, dtype=float).reshape(-1, 3)
         rgba = fx.rgba_uint8(color, 1)
         ns = self._at(t)
-        self._write(topic, ns, fx.scene_line_strip(ns, frame_id, topic, points, rgba[0], thickness))
+        self._write(topic, ns, fx.scene_line_strip(ns, frame_id, entity_id or topic, points,
+                                                   rgba[0], thickness))
         self._place(entity, frame_id)
         self.rerun.log(entity, rr.LineStrips3D([points], colors=rgba, radii=thickness / 2.0))
 
@@ -263,6 +304,138 @@ class StageRecorder:
         self._write(topic, ns, fx.scene_arrows(ns, frame_id, topic, origins, vectors, rgba))
         self._place(entity, frame_id)
         self.rerun.log(entity, rr.Arrows3D(origins=origins, vectors=vectors, colors=rgba))
+
+    def box3d(self, topic: str, t: float, size, translation=None, q_xyzw=(0.0, 0.0, 0.0, 1.0),
+              color=(240, 200, 30), frame_id: str = WORLD_FRAME) -> None:
+        """A solid box of ``size`` (3,) m at ``translation`` (3,) m and orientation ``q_xyzw``
+        in ``frame_id``, at time ``t``; ``translation`` None removes it (e.g. a lost sponge).
+
+        MCAP: ``foxglove.SceneUpdate`` with one frame-locked entity (id = topic) holding a
+        CubePrimitive, or deleting it. Rerun: ``Boxes3D`` (empty to remove it).
+        """
+        entity = _checked_topic(topic)
+        rgba = fx.rgba_uint8(color, 1)[0]
+        ns = self._at(t)
+        self._place(entity, frame_id)
+        if translation is None:
+            self._write(topic, ns, fx.scene_deletion(ns, topic))
+            self.rerun.log(entity, rr.Boxes3D(half_sizes=np.zeros((0, 3))))
+            return
+        self._write(topic, ns, fx.scene_shapes(ns, [(topic, frame_id, [
+            ("box", translation, q_xyzw, size, rgba)])]))
+        self.rerun.log(entity, rr.Boxes3D(
+            half_sizes=[0.5 * np.asarray(size, dtype=float)],
+            centers=[np.asarray(translation, dtype=float)],
+            quaternions=[fx.unit_quaternion(q_xyzw)], colors=[rgba], fill_mode="solid"))
+
+    def shapes(self, topic: str, t: float, entities) -> None:
+        """Solids attached to frames, for Foxglove's 3D panel (e.g. a robot's links): MCAP
+        only, one ``foxglove.SceneUpdate`` of frame-locked entities (see
+        :func:`wipelab.logs.foxglove_messages.scene_shapes` for ``entities``). Rerun draws
+        the same body from its own description (e.g. the URDF)."""
+        _checked_topic(topic)
+        ns = seconds_to_ns(t)
+        self._write(topic, ns, fx.scene_shapes(ns, entities))
+
+    def image_overlay(self, topic: str, t: float, frame_id: str, lines=(), points=(),
+                      line_color=(255, 60, 60), point_color=(80, 220, 80)) -> None:
+        """Drawing over a camera's images at time ``t``: line segments (m, 2, 2) and points
+        (k, 2) in pixels, origin at the top-left corner of the top-left pixel.
+
+        MCAP: ``foxglove.ImageAnnotations`` (Foxglove's Image panel draws them over the
+        camera's image topic). Rerun: ``LineStrips2D`` and ``Points2D`` in the image plane
+        of the camera whose optical frame is ``frame_id``.
+        """
+        entity = _checked_topic(topic)
+        lines = np.asarray(lines, dtype=float).reshape(-1, 2, 2)
+        points = np.asarray(points, dtype=float).reshape(-1, 2)
+        line_rgba, point_rgba = fx.rgba_uint8(line_color, 1)[0], fx.rgba_uint8(point_color, 1)[0]
+        ns = self._at(t)
+        self._write(topic, ns, fx.image_annotations(ns, lines, line_rgba, points, point_rgba, 2.0))
+        self.rerun.log(entity, rr.CoordinateFrame(frame_id + IMAGE_PLANE_SUFFIX), static=True)
+        self.rerun.log(entity, rr.LineStrips2D(lines, colors=line_rgba, radii=1.0),
+                       rr.Points2D(points, colors=point_rgba, radii=1.5))
+
+    def events(self, topic: str, t: np.ndarray, texts: Sequence[str], level: str = "info") -> None:
+        """Text events (what happened when) at times ``t`` (n,) in seconds.
+
+        MCAP: ``foxglove.Log`` (Foxglove's Log panel), name = the stage. Rerun: ``TextLog``.
+        """
+        entity = _checked_topic(topic)
+        for time, text in zip(np.atleast_1d(t).tolist(), texts):
+            ns = self._at(time)
+            self._write(topic, ns, fx.log_message(ns, level, str(text), self.stage))
+            self.rerun.log(entity, rr.TextLog(str(text), level=level.upper()))
+
+    def states(self, topic: str, t: np.ndarray, states: Sequence[str],
+               palette: dict[str, tuple] | None = None) -> None:
+        """A state that changes at times ``t`` (n,) in seconds to ``states`` (n,) (text).
+
+        MCAP: JSON channel ``wipelab.State``, one message ``{"state": ...}`` per change
+        (Foxglove's State Transitions panel plots ``/topic.state``). Rerun: ``StateChange``
+        (a state timeline view) styled by a static ``StateConfiguration`` with ``palette``
+        (state -> (3,) uint8 colour).
+        """
+        entity = _checked_topic(topic)
+        ns = seconds_array_to_ns(np.atleast_1d(t))
+        states = [str(s) for s in states]
+        if len(states) != ns.size:
+            raise ValueError(f"{topic}: need {ns.size} states, got {len(states)}")
+        schema = {"title": _STATE_SCHEMA, "type": "object",
+                  "properties": {"state": {"type": "string"}}, "required": ["state"]}
+        channel = self._mcap.json_channel(topic, _STATE_SCHEMA, schema)
+        for time_ns, state in zip(ns.tolist(), states):
+            self._mcap.write(channel, time_ns, json_bytes({"state": state}))
+        if palette:
+            values = list(palette)
+            self.rerun.log(entity, rr.StateConfiguration(
+                values=values, colors=fx.rgba_uint8(np.array([palette[v] for v in values]),
+                                                    len(values))), static=True)
+        self.rerun.send_columns(entity, indexes=[rr.TimeColumn(
+            TIMELINE, duration=ns.astype("timedelta64[ns]"))],
+            columns=rr.StateChange.columns(state=states))
+
+    def phase_curves(self, topic: str, t: float, chart: PhaseChart, phase: np.ndarray,
+                     curves: dict[str, np.ndarray], colors: dict[str, tuple],
+                     extra: dict | None = None) -> None:
+        """Curves over one period of the phase at time ``t``: values (n,) per name at
+        ``phase`` (n,) rad.
+
+        MCAP: JSON channel ``wipelab.PhaseCurves``, one message ``{"phase_rad": [...],
+        name: [...], ...}`` plus ``extra`` (Foxglove's Plot panel plots ``/topic.name``
+        against ``/topic.phase_rad``); names as for :meth:`scalars`. Rerun: ``LineStrips2D``
+        in ``chart`` coordinates, one colour per curve; draw the axes once with
+        :meth:`phase_chart` and name the colours with :meth:`phase_legend`.
+        """
+        entity = _checked_topic(topic)
+        unplottable = [n for n in curves if not PLOTTABLE_NAME.fullmatch(n) or n == "phase_rad"]
+        if unplottable:
+            raise ValueError(f"{topic}: curve names may hold only letters, digits and '_' "
+                             f"and not be phase_rad, got {unplottable}")
+        ns = self._at(t)
+        schema = {"title": "wipelab.PhaseCurves", "type": "object",
+                  "properties": {name: {"type": "array"} for name in ["phase_rad", *curves]},
+                  "required": ["phase_rad", *sorted(curves)]}
+        channel = self._mcap.json_channel(topic, "wipelab.PhaseCurves", schema)
+        self._mcap.write(channel, ns, json_bytes({"phase_rad": np.asarray(phase), **curves,
+                                                  **(extra or {})}))
+        strips, strip_colors = [], []
+        for name, values in curves.items():
+            pieces = chart.strips(phase, values)
+            strips += pieces
+            strip_colors += [fx.rgba_uint8(colors[name], 1)[0]] * len(pieces)
+        self.rerun.log(entity, rr.LineStrips2D(strips, colors=strip_colors, radii=1.0,
+                                               draw_order=10.0))
+
+    def phase_chart(self, topic: str, chart: PhaseChart,
+                    references: dict[str, float] | None = None) -> None:
+        """The axes of the chart in which :meth:`phase_curves` draws ``topic``, with
+        labelled reference lines (label -> value); Rerun only."""
+        chart.log_axes(self.rerun, _checked_topic(topic), references)
+
+    def phase_legend(self, topic: str, chart: PhaseChart, entries: dict[str, tuple]) -> None:
+        """What the colours of ``topic``'s curves mean (label -> (3,) uint8); Rerun only."""
+        chart.log_legend(self.rerun, _checked_topic(topic), entries)
 
     def transforms(self, t: float, transforms: Sequence[tuple]) -> None:
         """Frame transforms ``[(parent, child, translation (3,), q_xyzw (4,)), ...]`` at ``t``.
@@ -372,21 +545,24 @@ class StageRecorder:
 
     def camera_calibration(self, topic: str, t: float, K: np.ndarray, D: np.ndarray, width: int,
                            height: int, frame_id: str, R: np.ndarray | None = None,
-                           P: np.ndarray | None = None) -> None:
+                           P: np.ndarray | None = None,
+                           image_plane_distance: float | None = None) -> None:
         """Calibration of a pinhole camera whose optical frame is ``frame_id``.
 
         K (3, 3) pixels, D (5,) OpenCV (k1, k2, p1, p2, k3), optional R (3, 3) and P (3, 4).
         MCAP: ``foxglove.CameraCalibration`` (``plumb_bob``). Rerun: ``Pinhole`` from
-        ``frame_id`` to ``<frame_id>_image_plane`` (RDF camera axes), the frame in which
-        images with the same ``frame_id`` are shown (as ``rerun mcap convert`` does).
+        ``frame_id`` to ``<frame_id>_image_plane`` (RDF camera axes, the default), the frame in which
+        images with the same ``frame_id`` are shown (as ``rerun mcap convert`` does);
+        ``image_plane_distance`` (m) is the length of the frustum a 3D view draws.
         """
         entity = _checked_topic(topic)
         ns = self._at(t)
         self._write(topic, ns, fx.camera_calibration(ns, K, D, width, height, frame_id, R, P))
         self.rerun.log(entity, rr.Pinhole(
             image_from_camera=np.asarray(K, dtype=float).reshape(3, 3), resolution=[int(width), int(height)],
-            camera_xyz=rr.ViewCoordinates.RDF, parent_frame=rerun_frame(frame_id),
-            child_frame=frame_id + IMAGE_PLANE_SUFFIX))
+            parent_frame=rerun_frame(frame_id),  # camera axes RDF: Rerun's default, and
+            # unlike an explicit camera_xyz, not drawn as big arrows in every 3D view
+            child_frame=frame_id + IMAGE_PLANE_SUFFIX, image_plane_distance=image_plane_distance))
 
     def compressed_image(self, topic: str, t: float, data: bytes, frame_id: str) -> None:
         """One encoded image (JPEG, PNG or WebP bytes) from the camera with optical frame ``frame_id``.

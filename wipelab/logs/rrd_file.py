@@ -73,18 +73,46 @@ _BLUEPRINT_NAMESPACE = uuid.UUID("a3c5e0f1-3c1e-4c55-9f3e-7a4b2d1c0e99")
 
 
 def deterministic_blueprint(blueprint: rrb.BlueprintLike, key: str) -> rrb.Blueprint:
-    """A copy of ``blueprint`` as a Blueprint whose view and container ids are uuid5(key, tree position)."""
-    blueprint = copy.deepcopy(blueprint).to_blueprint()
+    """A copy of ``blueprint`` as a Blueprint whose view, container and visualizer-override
+    ids are uuid5(key, place in the layout).
 
-    def visit(part, position: str) -> None:
+    The containers and views are copied one by one (shallow): a deep copy would also copy
+    the Arrow arrays of their properties, and that loses the non-null flags of nested
+    fields, which the viewer's blueprint validation then rejects.
+    """
+    blueprint = copy.copy(blueprint.to_blueprint())
+
+    def visit(part, position: str):
+        part = copy.copy(part)
         if hasattr(part, "id"):
             part.id = uuid.uuid5(_BLUEPRINT_NAMESPACE, f"{key}/{position}")
-        for i, child in enumerate(getattr(part, "contents", None) or ()):
-            if isinstance(child, (rrb.Container, rrb.View)):
-                visit(child, f"{position}/{i}")
+        if isinstance(part, rrb.View) and part.visualizer_overrides:
+            part.visualizer_overrides = {
+                path: _deterministic_visualizers(overrides, f"{key}/{position}/{path}")
+                for path, overrides in part.visualizer_overrides.items()}
+        if isinstance(part, rrb.Container):
+            part.contents = [visit(child, f"{position}/{i}")
+                             if isinstance(child, (rrb.Container, rrb.View)) else child
+                             for i, child in enumerate(part.contents)]
+        return part
 
-    visit(blueprint.root_container, "root")
+    blueprint.root_container = visit(blueprint.root_container, "root")
     return blueprint
+
+
+def _deterministic_visualizers(overrides, key: str) -> list:
+    """A view's overrides of one entity with the visualizers' ids uuid5(key, index) (the SDK
+    draws them with uuid4); other overrides (time ranges, ...) unchanged."""
+    listed = list(overrides) if isinstance(overrides, (list, tuple)) else [overrides]
+    out = []
+    for i, override in enumerate(listed):
+        if isinstance(override, rrb.VisualizableArchetype):
+            override = override.visualizer()
+        if isinstance(override, rrb.Visualizer):
+            override = copy.copy(override)
+            override.id = uuid.uuid5(_BLUEPRINT_NAMESPACE, f"{key}/{i}")
+        out.append(override)
+    return out
 
 
 def _row_ids(chunk: Chunk) -> np.ndarray:

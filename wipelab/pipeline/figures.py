@@ -2,19 +2,28 @@
 
 Every function takes plain arrays and returns a ``matplotlib.figure.Figure``; the report
 reads the arrays from the stages' files. Figures are built with the object API on the Agg
-canvas, so no display and no global pyplot state are involved.
+canvas, so no display and no global pyplot state are involved. Colours are those of the
+Rerun layouts (:mod:`wipelab.logs.palette`): one per axis, per replay mode, per speed.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
 
-#: Colours: measured/input (blue), learned/commanded (red), reference (grey), as in the paper.
-INPUT_COLOUR, LEARNED_COLOUR, REFERENCE_COLOUR = "tab:blue", "tab:red", "0.45"
-SEGMENT_COLOURS = ("0.97", "#e8f1fb", "#fdf0e6", "#eaf6ea", "#f4ecf7", "#fbf7e3")
+from wipelab.logs.palette import (INPUT_COLOUR, LEARNED_COLOUR, MODE_COLOURS, OSCILLATOR_COLOURS,
+                                  XYZ_COLOURS, hex_colour, segment_colour)
+
+INPUT, LEARNED = hex_colour(INPUT_COLOUR), hex_colour(LEARNED_COLOUR)
+#: Reference lines (F0, a true value) and truth: black on the white figures.
+REFERENCE = "0.15"
+#: Shading of what was not observed (a tracking gap) and of a centroid-only frame.
+GAP_SHADE, CENTROID_SHADE = "0.55", "#f0a030"
+PHASE_TICKS = ([0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi, 2.0 * math.pi],
+               ["0", "π/2", "π", "3π/2", "2π"])
 
 
 def _figure(rows: int, height_per_row: float = 2.4, width: float = 8.0) -> tuple[Figure, list]:
@@ -26,11 +35,63 @@ def _figure(rows: int, height_per_row: float = 2.4, width: float = 8.0) -> tuple
     return figure, list(axes)
 
 
+def _legend_right(ax) -> None:
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
+
+
+def track_figure(t: np.ndarray, position: np.ndarray, valid: np.ndarray,
+                 truth: np.ndarray | None = None, quality: Sequence[str] | None = None,
+                 frame: str = "world") -> Figure:
+    """The tracked sponge: x, y, z over time on separate axes, against the truth when known,
+    with the frames where it was lost (and, per the quality column, where only colour-region
+    centres were triangulated) shaded; the 3D error when the truth is known.
+
+    Parameters
+    ----------
+    t : ndarray, shape (n,)
+        Frame times, s.
+    position : ndarray, shape (n, 3)
+        Tracked x, y, z (m) in ``frame``; NaN where lost.
+    valid : ndarray of bool, shape (n,)
+    truth : ndarray, shape (n, 3), optional
+        True x, y, z (m) at the same times (synthetic demos).
+    quality : sequence of str, length n, optional
+        Per frame ``box``, ``centroid`` or empty (lost).
+    """
+    rows = 4 if truth is not None else 3
+    figure, axes = _figure(rows, 1.9, width=9.0)
+    centroid = None if quality is None else np.array([q == "centroid" for q in quality])
+    for ax in axes:
+        _shade(ax, t, ~valid, GAP_SHADE, "lost")
+        if centroid is not None:
+            _shade(ax, t, centroid, CENTROID_SHADE, "centroid only")
+    for j, axis in enumerate("xyz"):
+        ax = axes[j]
+        ax.plot(t, np.where(valid, position[:, j], np.nan), color=hex_colour(XYZ_COLOURS[axis]),
+                linewidth=1.2, label=f"tracked {axis}")
+        if truth is not None:
+            ax.plot(t, truth[:, j], color=REFERENCE, linewidth=0.7, linestyle="--", label="truth")
+        ax.set_ylabel(f"{axis} (m)")
+        _legend_right(ax)
+    if truth is not None:
+        error = 1000.0 * np.linalg.norm(position - truth, axis=1)
+        axes[3].plot(t, np.where(valid, error, np.nan), color="0.3", linewidth=0.8,
+                     label=f"3D error, RMS {np.sqrt(np.nanmean(error[valid] ** 2)):.1f} mm")
+        axes[3].set_ylabel("error (mm)")
+        axes[3].set_ylim(bottom=0.0)
+        _legend_right(axes[3])
+    axes[-1].set_xlabel("time (s)")
+    axes[0].set_xlim(t[0], t[-1])
+    figure.suptitle(f"Tracked sponge centre ({frame} frame)")
+    return figure
+
+
 def frequency_figure(t: np.ndarray, oscillators_hz: np.ndarray, names: Sequence[str],
                      chosen_hz: np.ndarray | None = None,
                      true_hz: float | None = None,
                      observed: np.ndarray | None = None) -> Figure:
-    """Frequency adaptation (paper Fig. 4): every oscillator's frequency and the chosen Omega.
+    """Frequency adaptation (paper Fig. 4): every oscillator's frequency and the chosen Omega,
+    from t = 0, the legend beside the plot (the transient stays in view).
 
     Parameters
     ----------
@@ -42,23 +103,26 @@ def frequency_figure(t: np.ndarray, oscillators_hz: np.ndarray, names: Sequence[
     chosen_hz : ndarray, shape (n,), optional
         The fundamental frequency picked from them, Hz.
     true_hz : float, optional
-        The demonstration's true frequency (synthetic demos), Hz.
+        The frequency a synthetic demonstration was rendered at, Hz (drawn only when known).
     observed : ndarray of bool, shape (n,), optional
         Samples the learner saw; the gaps (the sponge lost) are shaded.
     """
-    figure, (ax,) = _figure(1, 3.2)
-    _shade_gaps(ax, t, observed)
+    figure, (ax,) = _figure(1, 3.2, width=9.0)
+    if observed is not None:
+        _shade(ax, t, ~observed, GAP_SHADE, "not observed")
     for j, name in enumerate(names):
-        ax.plot(t, oscillators_hz[:, j], linewidth=1.0, label=name)
+        ax.plot(t, oscillators_hz[:, j], linewidth=1.0, label=name,
+                color=hex_colour(OSCILLATOR_COLOURS[j % len(OSCILLATOR_COLOURS)]))
     if chosen_hz is not None:
-        ax.plot(t, chosen_hz, color="black", linewidth=2.0, alpha=0.7, label="chosen Ω")
+        ax.plot(t, chosen_hz, color="black", linewidth=2.0, alpha=0.7, label="chosen Ω / 2π")
     if true_hz is not None:
-        ax.axhline(true_hz, color=REFERENCE_COLOUR, linestyle="--", linewidth=1.0,
-                   label=f"true {true_hz:g} Hz")
+        ax.axhline(true_hz, color=REFERENCE, linestyle="--", linewidth=1.0,
+                   label=f"rendered at {true_hz:g} Hz")
+    ax.set_xlim(0.0, t[-1])
     ax.set_xlabel("time (s)")
     ax.set_ylabel("frequency (Hz)")
     ax.set_title("Frequency adaptation of the canonical system")
-    ax.legend(loc="best", fontsize="small")
+    _legend_right(ax)
     return figure
 
 
@@ -89,11 +153,12 @@ def waveform_figure(t: np.ndarray, demonstrated: np.ndarray, learned: np.ndarray
                            gridspec_kw={"width_ratios": [3, 1]})
     last = t >= t[-1] - 3.0 * period_s
     for j, dof in enumerate(dofs):
-        _shade_gaps(axes[j, 0], t, observed)
+        if observed is not None:
+            _shade(axes[j, 0], t, ~observed, GAP_SHADE, "not observed")
         for ax, window in ((axes[j, 0], slice(None)), (axes[j, 1], last)):
-            ax.plot(t[window], demonstrated[window, j], color=INPUT_COLOUR, linewidth=1.0,
+            ax.plot(t[window], demonstrated[window, j], color=INPUT, linewidth=1.0,
                     label="demonstrated")
-            ax.plot(t[window], learned[window, j], color=LEARNED_COLOUR, linewidth=1.0,
+            ax.plot(t[window], learned[window, j], color=LEARNED, linewidth=1.0,
                     label="learned")
             ax.grid(True, linewidth=0.5, alpha=0.5)
         axes[j, 0].set_ylabel(f"{dof} (m)")
@@ -105,74 +170,156 @@ def waveform_figure(t: np.ndarray, demonstrated: np.ndarray, learned: np.ndarray
     return figure
 
 
-def force_profile_figure(t: np.ndarray, heights: np.ndarray, height_names: Sequence[str],
-                         force_norm: np.ndarray, target_force: float,
-                         segments: Sequence[tuple[float, str]], title: str,
-                         end_of_learning: float | None = None) -> Figure:
-    """Height and |F| over time with the segments and the end of learning (paper Figs. 6-7).
+def height_force_figure(t: np.ndarray, tcp: dict[str, np.ndarray],
+                        contact: dict[str, np.ndarray] | None, force_norm: np.ndarray,
+                        target_force: float, segments: Sequence[tuple[float, str]], title: str,
+                        end_of_learning: float | None = None) -> Figure:
+    """Heights and |F| over time with the parts of the run shaded and named (paper Figs. 6-7).
 
     Parameters
     ----------
     t : ndarray, shape (n,)
-        Simulation time, s.
-    heights : ndarray, shape (n, k)
-        Tool heights (commanded, actual, ...), m, world z.
-    height_names : sequence of str, length k
+        Simulation time, s (NaN rows break the lines: the F/T calibration records nothing).
+    tcp : dict name -> ndarray (n,)
+        World z (m) of the tool centre point: ``actual``, ``commanded``, ``reference``.
+    contact : dict name -> ndarray (n,), optional
+        World z (m) of the ``contact_point`` (the sponge's lowest point) and the ``surface``
+        under it.
     force_norm : ndarray, shape (n,)
         Measured |F|, N.
     target_force : float
         F_0, N.
-    segments : sequence of (start time s, label)
-        Phases of the run (approach, learning, ...), shaded and labelled.
+    segments : sequence of (start time s, name)
+        Parts of the run (approach, F/T calibration, learning, ...), shaded and named.
     title : str
     end_of_learning : float, optional
         Time of the dashed vertical line, s.
     """
-    figure, (ax_z, ax_f) = _figure(2, 2.6, width=9.0)
-    _shade_segments([ax_z, ax_f], segments, float(t[-1]))
-    styles = {"commanded": (LEARNED_COLOUR, "--"), "actual": (INPUT_COLOUR, "-")}
-    for j, name in enumerate(height_names):
-        colour, style = styles.get(name, (REFERENCE_COLOUR, ":"))
-        ax_z.plot(t, heights[:, j], color=colour, linestyle=style, linewidth=1.0, label=name)
-    ax_f.plot(t, force_norm, color=INPUT_COLOUR, linewidth=0.8, label="measured |F|")
-    ax_f.axhline(target_force, color="black", linestyle="--", linewidth=0.8,
+    figure, axes = _figure(3 if contact is not None else 2, 2.3, width=10.0)
+    _shade_segments(axes, segments, float(np.nanmax(t)))
+    styles = {"actual": (INPUT, "-", 1.2), "commanded": ("0.5", ":", 1.0),
+              "reference": (LEARNED, "--", 1.0)}
+    for name, values in tcp.items():
+        colour, style, width = styles.get(name, ("0.3", "-.", 1.0))
+        axes[0].plot(t, values, color=colour, linestyle=style, linewidth=width, label=f"TCP {name}")
+    axes[0].set_ylabel("tool centre point\n(TCP) z (m)")
+    if contact is not None:
+        axes[1].plot(t, contact["surface"], color=REFERENCE, linewidth=1.0, label="surface")
+        axes[1].plot(t, contact["contact_point"], color=hex_colour((240, 180, 20)), linewidth=1.0,
+                     label="contact point")
+        axes[1].set_ylabel("contact point\nand surface z (m)")
+        axes[1].set_title("contact point: the sponge's lowest point; surface: under it",
+                          fontsize="small", loc="left")
+    ax_f = axes[-1]
+    ax_f.plot(t, force_norm, color=INPUT, linewidth=0.8, label="measured |F|")
+    ax_f.axhline(target_force, color=REFERENCE, linestyle="--", linewidth=0.8,
                  label=f"F0 = {target_force:g} N")
-    for ax in (ax_z, ax_f):
+    ax_f.set_ylabel("|F| (N)")
+    ax_f.set_xlabel("time (s)")
+    for ax in axes:
         if end_of_learning is not None:
             ax.axvline(end_of_learning, color="black", linestyle="--", linewidth=1.2)
+        _legend_right(ax)
     if end_of_learning is not None:
-        ax_f.annotate("end of learning", (end_of_learning, 1.0), xycoords=("data", "axes fraction"),
-                      xytext=(3, -12), textcoords="offset points", fontsize="small")
-    ax_z.set_ylabel("height z (m)")
-    ax_f.set_ylabel("|F| (N)")
-    ax_f.set_ylim(0.0, max(3.0 * target_force, float(np.nanpercentile(force_norm, 99.5)) * 1.1))
-    ax_f.set_xlabel("time (s)")
+        ax_f.annotate("end of learning", (end_of_learning, 1.0),
+                      xycoords=("data", "axes fraction"), xytext=(3, -12),
+                      textcoords="offset points", fontsize="small")
     figure.suptitle(title)
-    for ax in (ax_z, ax_f):
-        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
+    return figure
+
+
+def profile_figure(phase: np.ndarray, surface_mm: np.ndarray,
+                   learned_mm: Sequence[np.ndarray], title: str) -> Figure:
+    """The learned height profile after each period against the true surface, over the phase
+    of the movement (how the profile converges, cf. paper Figs. 6-7).
+
+    Parameters
+    ----------
+    phase : ndarray, shape (m,)
+        Phase, rad, in [0, 2 pi).
+    surface_mm : ndarray, shape (m,)
+        The true surface as the TCP height at which the sponge presses with F_0, mm from its
+        mean.
+    learned_mm : sequence of ndarray (m,)
+        The learned profile after period 1, 2, ..., mm from the same mean.
+    """
+    figure, (ax,) = _figure(1, 3.4, width=9.0)
+    ramp = np.linspace(0.25, 1.0, len(learned_mm)) if len(learned_mm) > 1 else [1.0]
+    for period, (values, strength) in enumerate(zip(learned_mm, ramp), start=1):
+        ax.plot(phase, values, color=LEARNED, alpha=float(strength), linewidth=1.0 + strength,
+                label=f"learned, period {period}")
+    ax.plot(phase, surface_mm, color=REFERENCE, linestyle="--", linewidth=1.5,
+            label="true surface (TCP z at F0)")
+    ax.set_xticks(*PHASE_TICKS)
+    ax.set_xlim(0.0, 2.0 * math.pi)
+    ax.set_xlabel("phase of the movement (rad)")
+    ax.set_ylabel("height - mean (mm)")
+    ax.set_title(title)
+    _legend_right(ax)
+    return figure
+
+
+def force_over_phase_figure(curves: dict[str, list[tuple[str, tuple, np.ndarray, np.ndarray]]],
+                            target_force: float, title: str) -> Figure:
+    """|F| over the phase, one panel per replay mode, every speed overlaid.
+
+    Parameters
+    ----------
+    curves : dict mode -> [(speed label e.g. "2x (0.50 Hz)", (3,) uint8 colour, phase (m,)
+        rad, mean |F| (m,) N), ...]
+    target_force : float
+        F_0, N.
+    """
+    modes = list(curves)
+    columns = 2 if len(modes) > 1 else 1
+    rows = math.ceil(len(modes) / columns)
+    figure = Figure(figsize=(5.0 * columns + 1.6, 0.8 + 2.8 * rows), dpi=110,
+                    layout="constrained")
+    axes = figure.subplots(rows, columns, squeeze=False, sharex=True)
+    for ax, mode in zip(axes.ravel(), modes):
+        for label, colour, phase, force in curves[mode]:
+            ax.plot(phase, force, color=hex_colour(colour), linewidth=1.5, label=label)
+        ax.axhline(target_force, color=REFERENCE, linestyle="--", linewidth=0.8,
+                   label=f"F0 = {target_force:g} N")
+        ax.set_title(mode, color=hex_colour(MODE_COLOURS.get(mode, (0, 0, 0))), loc="left")
+        ax.set_xticks(*PHASE_TICKS)
+        ax.set_xlim(0.0, 2.0 * math.pi)
+        ax.set_ylim(bottom=0.0)
+        ax.set_ylabel("|F| (N)")
+        ax.grid(True, linewidth=0.5, alpha=0.5)
+    for ax in axes.ravel()[len(modes):]:
+        ax.set_visible(False)
+    for ax in axes[-1]:
+        ax.set_xlabel("phase of the movement (rad)")
+    axes[0, -1].legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize="small",
+                       title="speed")
+    figure.suptitle(title)
     return figure
 
 
 def force_error_bars_figure(rms_error: dict[str, dict[str, float]], title: str) -> Figure:
-    """RMS(|F| - F0) per frequency scale (groups) and mode (bars).
+    """RMS(|F| - F0) per speed (groups, labelled with their frequency) and mode (bars, one
+    colour per mode).
 
     Parameters
     ----------
-    rms_error : dict scale label -> {mode: RMS error in N}
+    rms_error : dict speed label (e.g. "2x (0.50 Hz)") -> {mode: RMS error in N}
     title : str
     """
-    scales = list(rms_error)
-    modes = sorted({mode for values in rms_error.values() for mode in values})
-    figure = Figure(figsize=(8.0, 3.4), dpi=110, layout="constrained")
+    speeds = list(rms_error)
+    modes = [m for m in MODE_COLOURS if any(m in values for values in rms_error.values())]
+    modes += sorted({m for values in rms_error.values() for m in values} - set(modes))
+    figure = Figure(figsize=(8.5, 3.4), dpi=110, layout="constrained")
     ax = figure.subplots()
     width = 0.8 / max(len(modes), 1)
-    x = np.arange(len(scales))
+    x = np.arange(len(speeds))
     for i, mode in enumerate(modes):
-        values = [rms_error[s].get(mode, np.nan) for s in scales]
-        bars = ax.bar(x + (i - (len(modes) - 1) / 2) * width, values, width, label=mode)
+        values = [rms_error[s].get(mode, np.nan) for s in speeds]
+        bars = ax.bar(x + (i - (len(modes) - 1) / 2) * width, values, width, label=mode,
+                      color=hex_colour(MODE_COLOURS.get(mode, (128, 128, 128))))
         ax.bar_label(bars, fmt="%.2f", fontsize="x-small", padding=1)
-    ax.set_xticks(x, [f"{s}x" for s in scales])
-    ax.set_xlabel("frequency scale (x learning frequency)")
+    ax.set_xticks(x, speeds)
+    ax.set_xlabel("speed: frequency scale (frequency in Hz)")
     ax.set_ylabel("RMS(|F| - F0) (N)")
     ax.set_title(title)
     ax.grid(True, axis="y", linewidth=0.5, alpha=0.5)
@@ -180,25 +327,25 @@ def force_error_bars_figure(rms_error: dict[str, dict[str, float]], title: str) 
     return figure
 
 
-def _shade_gaps(ax, t: np.ndarray, observed: np.ndarray | None) -> None:
-    """Shade the stretches of ``t`` where ``observed`` is False, labelled once."""
-    if observed is None or observed.all():
+def _shade(ax, t: np.ndarray, mask: np.ndarray, colour: str, label: str) -> None:
+    """Shade the stretches of ``t`` where ``mask`` holds, labelled once."""
+    if not mask.any():
         return
-    edges = np.diff(np.concatenate([[0], (~observed).astype(int), [0]]))
+    edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
     for n, (start, stop) in enumerate(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1))):
-        ax.axvspan(t[start], t[stop - 1], color=REFERENCE_COLOUR, alpha=0.2, linewidth=0,
-                   label="not observed" if n == 0 else None)
+        ax.axvspan(t[start], t[stop - 1], color=colour, alpha=0.25, linewidth=0,
+                   label=label if n == 0 else None)
 
 
 def _shade_segments(axes: list, segments: Sequence[tuple[float, str]], t_end: float) -> None:
-    """Shade each segment and name it on a top axis above the first plot."""
+    """Shade each part of the run in its colour and name it on a top axis."""
     bounds = [start for start, _ in segments[1:]] + [t_end]
-    for k, ((start, _), end) in enumerate(zip(segments, bounds)):
+    for (start, name), end in zip(segments, bounds):
         for ax in axes:
-            ax.axvspan(start, end, color=SEGMENT_COLOURS[k % len(SEGMENT_COLOURS)], zorder=0,
-                       linewidth=0)
+            ax.axvspan(start, end, color=hex_colour(segment_colour(name)), alpha=0.12,
+                       zorder=0, linewidth=0)
     top = axes[0].secondary_xaxis("top")
     top.set_xticks([(start + end) / 2 for (start, _), end in zip(segments, bounds)],
-                   [label for _, label in segments], rotation=25, ha="left",
+                   [name for _, name in segments], rotation=25, ha="left",
                    fontsize="x-small", color="0.25")
     top.tick_params(length=0)

@@ -48,7 +48,7 @@ from wipelab.sim.metrics import coverage, force_metrics, profile_error
 from wipelab.model_file import read_model
 from wipelab.sim.path import (PathGenerator, place_model, refit_error, require_dofs,
                               with_kernels)
-from wipelab.sim.recording import Segment, log_run, wiping_blueprint
+from wipelab.sim.recording import Segment, adapt_blueprint, log_run
 from wipelab.sim.session import SafetyStop
 from wipelab.sim.sponge import SpongeParams
 from wipelab.sim.surfaces import load_surface
@@ -287,7 +287,7 @@ def run_adapt(model_path: str | os.PathLike, out_dir: str | os.PathLike,
         with staged_output(out_dir) as tmp:
             write_json(tmp / "adapted_model.json", adapted.to_dict())
             write_json(tmp / "metrics.json", metrics)
-            with StageRecorder(tmp, "adapt", parameters, inputs, wiping_blueprint("adapt")) as rec:
+            with StageRecorder(tmp, "adapt", parameters, inputs, adapt_blueprint(trace)) as rec:
                 log_run(rec, "adapt", task, trace, run.segments, run.profiles, adapted)
             write_json(tmp / "manifest.json",
                        build_manifest("adapt", inputs, parameters, params.seed))

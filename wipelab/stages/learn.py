@@ -9,14 +9,18 @@ amplitude and anchor.
 
 Logged topics (MCAP topic = Rerun entity), time = the input's time in seconds:
 
-    /input/trajectory             the demonstration, one series per DOF (m)
+    /input/trajectory             the demonstration, one series per DOF (m), null in a gap
     /input/valid                  1 where the input was observed, 0 in a gap (learned nothing)
     /oscillators/frequency_hz     every oscillator's frequency (AFO pool: omega_1..3, Fig. 4)
     /oscillators/fundamental_hz   the selected fundamental Omega / 2 pi
     /learner/hand_overs           detected periods handed to the canonical system so far
                                   (1 after the start-up; more when the supervisor re-locks)
-    /dmp/<dof>/waveform           input vs learned movement of one DOF (m, Fig. 5)
+    /dmp/<dof>/waveform           input (demonstrated) vs learned movement of one DOF (m,
+                                  Fig. 5); the input is null where it was not observed
     /dmp/<dof>/weights            the weights w_00.. as they converge
+    /dmp/<dof>/period             one period over the phase: the learned waveform with the
+                                  weights so far, and the demonstration's last period
+                                  (wipelab.PhaseCurves, up to 60 times)
     /model                        model.json at the end of the input (schema wipelab.Model)
 """
 
@@ -25,7 +29,7 @@ from __future__ import annotations
 import math
 import os
 import sys
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -36,7 +40,10 @@ from wipelab.errors import InputError
 from wipelab.learning import (CANONICAL_SYSTEMS, MODEL_FORMAT, LearnHistory, OfflineParameters,
                               OnlineParameters, PeriodicModel, harmonic_fit, learn_offline,
                               learn_online, periodicity, to_uniform)
-from wipelab.logs import StageRecorder
+from wipelab.logs import StageRecorder, stage_panels, whole_run
+from wipelab.logs.palette import (INPUT_COLOUR, LEARNED_COLOUR, OSCILLATOR_COLOURS,
+                                  REFERENCE_COLOUR)
+from wipelab.logs.phase_chart import PhaseChart
 from wipelab.manifest import build_manifest, sha256_file, write_json
 from wipelab.model_file import read_model
 from wipelab.stage_output import staged_file, staged_output
@@ -47,6 +54,11 @@ MODES = ("online", "offline")
 TRACK_TOPIC = "/track/position"
 #: Fewest samples a demonstration may have.
 MIN_SAMPLES = 20
+#: The learned period is logged at most this many times (over the phase, /dmp/<dof>/period).
+PERIOD_SNAPSHOTS = 60
+#: Phases of the logged period, and the fewest demonstrated samples a period is drawn from.
+PERIOD_PHASES = np.linspace(0.0, 2.0 * math.pi, 129)
+MIN_PERIOD_SAMPLES = 8
 #: Most samples on a time grid, of a demonstration or a rollout (a week at 30 Hz, 5.5 h of
 #: 1 kHz motion capture); irregular time stamps or a typo in --periods ask for far more.
 MAX_SAMPLES = 20_000_000
@@ -84,18 +96,24 @@ class LearnParams:
 
 
 def learn_blueprint(dofs) -> rrb.Blueprint:
-    """Default Rerun layout: frequencies on top, then per DOF its waveform and its weights."""
+    """Default Rerun layout: the frequencies from t = 0; per DOF the demonstration against
+    the learned movement over time, and the learned period over the phase."""
     return rrb.Blueprint(
         rrb.Vertical(
-            rrb.Horizontal(rrb.TimeSeriesView(origin="/oscillators", name="frequencies (Hz)"),
-                           rrb.TextDocumentView(origin="/model", name="model")),
+            rrb.TimeSeriesView(origin="/oscillators", name="frequency adaptation (Hz)",
+                               axis_x=whole_run(), plot_legend=rrb.PlotLegend("RightTop")),
             rrb.Horizontal(*[rrb.TimeSeriesView(origin=f"/dmp/{dof}/waveform",
-                                                name=f"{dof}: input vs learned (m)")
+                                                name=f"{dof}: input (demonstrated) vs learned (m)",
+                                                axis_x=whole_run(),
+                                                plot_legend=rrb.PlotLegend("RightTop"))
                              for dof in dofs]),
-            rrb.Horizontal(*[rrb.TimeSeriesView(origin=f"/dmp/{dof}/weights",
-                                                name=f"{dof}: weights") for dof in dofs]),
-            row_shares=[1, 2, 1]),
-        collapse_panels=True)
+            rrb.Horizontal(*[rrb.Spatial2DView(origin=f"/dmp/{dof}/period",
+                                               name=f"{dof}: the learned period over the phase "
+                                                    f"(rad), as learning goes",
+                                               visual_bounds=PhaseChart.bounds())
+                             for dof in dofs]),
+            row_shares=[1, 1.2, 1.3]),
+        *stage_panels())
 
 
 def _track_mcap(path: Path, params: LearnParams) -> Trajectory:
@@ -218,25 +236,69 @@ def learn(trajectory: str | os.PathLike, out_dir: str | os.PathLike,
 def _log(rec: StageRecorder, model: PeriodicModel, history: LearnHistory) -> None:
     """Everything the learner went through (see the module docstring for the topics)."""
     t = history.t
-    rec.scalars("/input/trajectory", t, history.input, names=model.dofs)
+    gaps = ~history.valid
+    # what the learner did not see is not drawn: a gap in the demonstration stays a gap
+    demonstrated = np.where(gaps[:, None], np.nan, history.input)
+    rec.scalars("/input/trajectory", t, demonstrated, names=model.dofs)
     rec.scalars("/input/valid", t, history.valid.astype(np.float64), names=["valid"])
-    names = ["omega"] if history.oscillators_hz.shape[1] == 1 else \
-        [f"omega_{i + 1}" for i in range(history.oscillators_hz.shape[1])]
-    rec.scalars("/oscillators/frequency_hz", t, history.oscillators_hz, names=names)
-    rec.scalars("/oscillators/fundamental_hz", t, history.fundamental_hz, names=["fundamental"])
+    count = history.oscillators_hz.shape[1]
+    names = ["omega"] if count == 1 else [f"omega_{i + 1}" for i in range(count)]
+    rec.scalars("/oscillators/frequency_hz", t, history.oscillators_hz, names=names,
+                colors=np.array(OSCILLATOR_COLOURS[:count]))
+    rec.scalars("/oscillators/fundamental_hz", t, history.fundamental_hz, names=["fundamental"],
+                colors=np.array([REFERENCE_COLOUR]))
     rec.scalars("/learner/hand_overs", t, history.hand_overs.astype(np.float64),
                 names=["hand_overs"])
     weight_names = [f"w_{i:02d}" for i in range(model.kernels)]
     for j, dof in enumerate(model.dofs):
         rec.scalars(f"/dmp/{dof}/waveform", t,
-                    np.column_stack([history.input[:, j], history.output[:, j]]),
-                    names=["input", "learned"])
+                    np.column_stack([demonstrated[:, j], history.output[:, j]]),
+                    names=["input", "learned"], colors=np.array([INPUT_COLOUR, LEARNED_COLOUR]))
         rec.scalars(f"/dmp/{dof}/weights", history.weights_t, history.weights[:, j, :],
                     names=weight_names)
+    _log_periods(rec, model, history, demonstrated)
     rec.json("/model", float(t[-1]), model.to_dict(), schema_name="wipelab.Model",
              schema={"title": "wipelab.Model", "type": "object",
                      "properties": {"format": {"const": MODEL_FORMAT}},
                      "required": ["format", "frequency_hz", "dofs", "weights"]})
+
+
+def _log_periods(rec: StageRecorder, model: PeriodicModel, history: LearnHistory,
+                 demonstrated: np.ndarray) -> None:
+    """Per DOF, over one period of the phase: the learned waveform with the weights learned
+    so far (and the model's goal and amplitude) and the demonstration's last period, at up to
+    :data:`PERIOD_SNAPSHOTS` of the weight snapshots."""
+    step = max(1, int(np.ceil(len(history.weights_t) / PERIOD_SNAPSHOTS)))
+    picks = list(range(0, len(history.weights_t), step))
+    if picks[-1] != len(history.weights_t) - 1:
+        picks.append(len(history.weights_t) - 1)
+    snapshots = []
+    for k in picks:
+        time = float(history.weights_t[k])
+        learned = replace(model, weights=history.weights[k]).waveform(PERIOD_PHASES)
+        now = min(np.searchsorted(history.t, time, side="right"), len(history.t)) - 1
+        period = 1.0 / max(float(history.fundamental_hz[now]), 1e-6)
+        window = (history.t > time - period) & (history.t <= time) & history.valid
+        shown = np.full((len(PERIOD_PHASES), len(model.dofs)), np.nan)
+        if window.sum() >= MIN_PERIOD_SAMPLES:
+            phase = np.mod(history.phase[window], 2.0 * math.pi)
+            order = np.argsort(phase)
+            for j in range(len(model.dofs)):
+                shown[:, j] = np.interp(PERIOD_PHASES, phase[order],
+                                        demonstrated[window, j][order], period=2.0 * math.pi)
+        snapshots.append((time, learned, shown))
+    for j, dof in enumerate(model.dofs):
+        values = np.concatenate([np.concatenate([learned[:, j], shown[:, j]])
+                                 for _, learned, shown in snapshots])
+        chart = PhaseChart.fitting(values, f"{dof} (m)")
+        topic = f"/dmp/{dof}/period"
+        rec.phase_chart(topic, chart)
+        rec.phase_legend(topic, chart, {"demonstrated, last period": INPUT_COLOUR,
+                                        "learned so far": LEARNED_COLOUR})
+        for time, learned, shown in snapshots:
+            rec.phase_curves(topic, time, chart, PERIOD_PHASES,
+                             {"demonstrated": shown[:, j], "learned": learned[:, j]},
+                             {"demonstrated": INPUT_COLOUR, "learned": LEARNED_COLOUR})
 
 
 def _per_dof(option: str, values, model: PeriodicModel) -> np.ndarray | None:

@@ -37,7 +37,7 @@ from wipelab.manifest import build_manifest, write_json
 from wipelab.sim.metrics import coverage, force_metrics
 from wipelab.model_file import read_model
 from wipelab.sim.path import PathGenerator, dof_waveform, place_model, require_dofs
-from wipelab.sim.recording import Segment, log_run, wiping_blueprint
+from wipelab.sim.recording import ReplayRun, Segment, log_run, replay_blueprint, speed_label
 from wipelab.sim.session import SafetyStop
 from wipelab.sim.sponge import SpongeParams
 from wipelab.sim.surfaces import load_surface
@@ -217,7 +217,8 @@ def run_replay(model_path: str | os.PathLike, out_dir: str | os.PathLike,
             for scale in params.frequency_scales:
                 for mode in modes:
                     label = len(runs) + 1
-                    segments.append(Segment(f"{scale:g}x {mode}", label, session.time))
+                    segments.append(Segment(f"{speed_label(scale, base_hz * scale)} {mode}",
+                                            label, session.time))
                     run = _run_one(task, path, 2.0 * math.pi * base_hz * scale, mode, label,
                                    params, z_plane, bar)
                     runs.append(replace(run, scale=scale))
@@ -236,8 +237,10 @@ def run_replay(model_path: str | os.PathLike, out_dir: str | os.PathLike,
         with staged_output(out_dir) as tmp:
             write_json(tmp / "metrics.json", metrics)
             with StageRecorder(tmp, "replay", parameters, inputs,
-                               wiping_blueprint("replay")) as rec:
-                log_run(rec, "replay", task, trace, segments, (), model)
+                               replay_blueprint(trace, modes)) as rec:
+                log_run(rec, "replay", task, trace, segments, (), model,
+                        [ReplayRun(run.mode, run.scale, base_hz * run.scale, run.start, run.end)
+                         for run in runs])
             write_json(tmp / "manifest.json",
                        build_manifest("replay", inputs, parameters, params.seed))
     finally:

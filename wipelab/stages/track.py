@@ -11,8 +11,9 @@ demo.toml), tracks the sponge with :class:`wipelab.vision.tracker.SpongeTracker`
   and the normalised offsets ``x_norm``, ``y_norm`` from the centre of the demonstration
   area (paper Fig. 3);
 * ``track.mcap`` / ``track.rrd``: both videos (video references), both camera calibrations,
-  /tf of the cameras, the track, the particles, the demonstration area, per-frame quality;
-  in Rerun also the particles and the estimate drawn over both images;
+  /tf of the cameras, the track (x, y, z; the sponge box per frame; the trajectory growing
+  piece by piece), the particles, the demonstration area, the per-frame quality (a state);
+  the sponge box and the particles drawn over both images (``/stereo/*/overlay``);
 * ``manifest.json``.
 
 Everything is checked before anything is written; bad input raises InputError.
@@ -34,16 +35,21 @@ from tqdm import tqdm
 
 from wipelab.errors import InputError
 from wipelab.input_files import read_input_toml
-from wipelab.logs import StageRecorder
+from wipelab.logs import TIMELINE, StageRecorder, stage_panels, whole_run
+from wipelab.logs.palette import XYZ_COLOURS
+from wipelab.logs.timebase import seconds_array_to_ns
 from wipelab.manifest import build_manifest, write_json
 from wipelab.stage_output import staged_output
 from wipelab.trajectory_csv import write_trajectory
 from wipelab.vision.calibration import StereoCalibration, load_calibration
 from wipelab.vision.colour_model import NAMED_COLOURS, ColourSource, parse_hsv_range
 from wipelab.vision.demonstration_area import DemonstrationArea, measure_demonstration_area
+from wipelab.sim.kinematics import rotation_about_axis
 from wipelab.vision.projection import invert_transform
-from wipelab.vision.sponge_box import SpongeBox
-from wipelab.vision.tracker import QUALITY_BOX, QUALITY_NONE, SpongeTracker, TrackerParams
+from wipelab.vision.sponge_box import EDGES, SpongeBox, yaw_rotation
+from wipelab.vision.table_plane import table_axes
+from wipelab.vision.tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_NONE, SpongeTracker,
+                                    TrackerParams)
 from wipelab.vision.video_io import H264Writer, StereoVideoReader
 
 DEFAULT_COLOUR = "yellow"
@@ -239,11 +245,15 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
                                    "sponge": None if sponge is None else asdict(sponge)}
     inputs = {"left_video": demo.left, "right_video": demo.right,
               "calibration": demo.calibration_path}
+    scene = TrackScene(demo.calibration, "world" if result.frame == "world" else LEFT_FRAME,
+                       _table_axes(tracker), result.sponge_size, result.region_size)
+    blueprint = track_blueprint(scene, result.area,
+                                float(np.nanmean(result.poses[result.valid, 2])))
     with staged_output(out_dir) as tmp:
         write_trajectory(tmp / "track.csv", result.t, _csv_columns(result))
-        with StageRecorder(tmp, "track", parameters, inputs, track_blueprint(),
+        with StageRecorder(tmp, "track", parameters, inputs, blueprint,
                            attachments={"calibration.yaml": demo.calibration_path}) as rec:
-            log_track(rec, demo, result, quiet)
+            log_track(rec, demo, result, scene, quiet)
         write_json(tmp / "manifest.json", build_manifest("track", inputs, parameters,
                                                          params.seed))
     return result
@@ -304,17 +314,129 @@ def _csv_columns(result: TrackResult) -> dict[str, np.ndarray]:
             "y_norm": result.normalised[:, 1]}
 
 
-def track_blueprint() -> rrb.Blueprint:
-    """Both images with particles and estimate, the 3D scene, and x, y, z over time."""
+#: Colours of the logs: sponge box, particles, trajectory, demonstration area.
+SPONGE_COLOUR, PARTICLE_COLOUR = (255, 70, 50), (80, 220, 80)
+TRAJECTORY_COLOUR, AREA_COLOUR = (255, 200, 0), (90, 160, 255)
+#: Length (m) of the camera frustums drawn in the 3D view.
+FRUSTUM_LENGTH = 0.1
+#: How each frame was tracked (``/track/quality``: the quality column, "lost" for empty)
+#: and its colour in the logs.
+LOST = "lost"
+QUALITY_COLOURS = {QUALITY_BOX: (40, 175, 120), QUALITY_CENTROID: (240, 150, 40),
+                   LOST: (200, 60, 60)}
+#: Thickness of the flat box drawn where only the colour region was measured, as a fraction
+#: of the region's size.
+REGION_THICKNESS = 0.15
+
+
+@dataclass(frozen=True)
+class TrackScene:
+    """What logging a frame needs: the cameras, the frame tracks are reported in, how the
+    table lies in it, and the size of what is drawn at the sponge.
+
+    Attributes
+    ----------
+    calibration : StereoCalibration
+    frame : str
+        Frame id of the track frame in the logs: ``world`` or the left camera's optical frame.
+    R_track_table : ndarray, shape (3, 3)
+        Table axes in the track frame (the sponge's yaw turns about the table normal).
+    sponge_size : tuple of float or None
+        (length, width, height) of the sponge box, m, when known: drawn on ``box`` frames.
+    region_size : float
+        Size of the sponge's visible colour region, m: a flat square of this size is drawn on
+        ``centroid`` frames (and on box frames when the box size is unknown).
+    """
+
+    calibration: StereoCalibration
+    frame: str
+    R_track_table: np.ndarray
+    sponge_size: tuple[float, float, float] | None
+    region_size: float
+
+    @property
+    def T_left_track(self) -> np.ndarray:
+        return invert_transform(self.calibration.T_track_left)
+
+    def camera_centres(self) -> np.ndarray:
+        """Left and right camera centres (2, 3) in the track frame."""
+        T_track_right = self.calibration.T_track_left @ invert_transform(
+            self.calibration.right.T_cam_ref)
+        return np.stack([self.calibration.T_track_left[:3, 3], T_track_right[:3, 3]])
+
+    def box_size(self, quality: str) -> np.ndarray:
+        """Size (3,) m of what is drawn at the sponge on a frame of ``quality``: the sponge
+        box, or a flat square the size of the colour region."""
+        if quality == QUALITY_BOX and self.sponge_size is not None:
+            return np.asarray(self.sponge_size, dtype=float)
+        side = self.region_size if np.isfinite(self.region_size) else 0.1
+        return np.array([side, side, REGION_THICKNESS * side])
+
+    def sponge_rotation(self, yaw: float) -> np.ndarray:
+        """Sponge axes (3, 3) in the track frame at ``yaw`` (rad; 0 when unknown)."""
+        return self.R_track_table @ yaw_rotation(np.asarray(yaw if np.isfinite(yaw) else 0.0))
+
+    def box_edges_px(self, pose: np.ndarray, size: np.ndarray) -> list[np.ndarray]:
+        """The 12 edges of a box of ``size`` (3,) at ``pose`` (x, y, z, yaw) projected into the
+        left and right images: two arrays (12, 2, 2) of pixels (top-left pixel corner = 0)."""
+        corners = pose[:3] + SpongeBox(*size).corners() @ self.sponge_rotation(pose[3]).T
+        return [self._pixels(camera, corners)[EDGES] for camera in self.cameras()]
+
+    def particles_px(self, particles: np.ndarray) -> list[np.ndarray]:
+        """Particle centres (m, 3) in the track frame -> pixels (m, 2) in each image."""
+        return [self._pixels(camera, particles[:, :3]) for camera in self.cameras()]
+
+    def cameras(self):
+        return self.calibration.left, self.calibration.right
+
+    def _pixels(self, camera, points_track: np.ndarray) -> np.ndarray:
+        T = self.T_left_track
+        return camera.project(points_track @ T[:3, :3].T + T[:3, 3]) + 0.5
+
+
+def _table_axes(tracker: SpongeTracker) -> np.ndarray:
+    """Axes (3, 3) of the table in the track frame, as the tracker measures yaw (identity
+    before the plane the sponge moves in is known)."""
+    plane = tracker.region.sponge_plane()
+    return np.eye(3) if plane is None else table_axes(tracker.T_track_left[:3, :3] @ plane.normal)
+
+
+def track_blueprint(scene: TrackScene, area: DemonstrationArea, height: float) -> rrb.Blueprint:
+    """Both images with the projected sponge box and particles; the 3D view framed on the
+    demonstration area, with both camera frustums and the trajectory growing over time;
+    x, y, z each on its own axes; whether the sponge was tracked."""
+    centre = np.array([*area.centre, height])
+    cameras = scene.camera_centres().mean(axis=0)
+    up = scene.R_track_table[:, 2]
+    # from the cameras' side, turned 40 degrees about the table normal: the cameras at the
+    # edge of the view, the demonstration in the middle
+    side = rotation_about_axis(up, np.radians(40.0)) @ (cameras - centre)
+    eye = rrb.EyeControls3D(position=centre + 1.5 * side, look_target=centre + 0.3 * (cameras - centre),
+                            eye_up=up)
+    growing = rrb.VisibleTimeRanges(timeline="time", start=rrb.TimeRangeBoundary.infinite(),
+                                    end=rrb.TimeRangeBoundary.cursor_relative())
+    axes = [rrb.TimeSeriesView(
+        origin="/track/position", name=f"sponge {axis} (m)", axis_x=whole_run(),
+        plot_legend=rrb.PlotLegend(visible=False),
+        overrides={"/track/position": rr.SeriesLines.from_fields(
+            visible_series=[a == axis for a in "xyz"])}) for axis in "xyz"]
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Vertical(rrb.Spatial2DView(origin="/stereo/left", name="left camera"),
                          rrb.Spatial2DView(origin="/stereo/right", name="right camera")),
-            rrb.Vertical(rrb.Spatial3DView(origin="/", name="scene"),
-                         rrb.TimeSeriesView(origin="/track/position", name="sponge x, y, z (m)"),
-                         row_shares=[3, 2]),
+            rrb.Vertical(rrb.Spatial3DView(origin="/", name="sponge, cameras and demonstration area",
+                                           contents=["+ /**", "- /tf/**",
+                                                     *(f"- /stereo/{side}/{what}"
+                                                       for side in ("left", "right")
+                                                       for what in ("video", "overlay"))],
+                                           eye_controls=eye,
+                                           overrides={"/track/trajectory": growing}),
+                         *axes,
+                         rrb.StateTimelineView(origin="/track/quality", name="sponge tracked?",
+                                               time_view=whole_run()),
+                         row_shares=[4, 1, 1, 1, 0.8]),
             column_shares=[1, 1]),
-        collapse_panels=True)
+        *stage_panels())
 
 
 def _quaternion_xyzw(R: np.ndarray) -> np.ndarray:
@@ -350,22 +472,67 @@ def _video_for_logs(path: Path, fps: float, size: tuple[int, int], workdir: Path
     return copy
 
 
-def log_track(rec: StageRecorder, demo: Demo, result: TrackResult, quiet: bool = True) -> None:
-    """Write the run into the MCAP and Rerun recordings of ``rec``."""
-    calibration = demo.calibration
+def log_track_setup(rec: StageRecorder, scene: TrackScene) -> None:
+    """What does not change from frame to frame: /tf of the cameras and their calibrations
+    (the 3D view draws their frustums)."""
+    calibration = scene.calibration
     width, height = calibration.image_size
-    frame = "world" if result.frame == "world" else LEFT_FRAME
     T_track_left = calibration.T_track_left
     T_track_right = T_track_left @ invert_transform(calibration.right.T_cam_ref)
-    tf = [(frame, RIGHT_FRAME, T_track_right[:3, 3], _quaternion_xyzw(T_track_right[:3, :3]))]
-    if frame == "world":
+    tf = [(scene.frame, RIGHT_FRAME, T_track_right[:3, 3], _quaternion_xyzw(T_track_right[:3, :3]))]
+    if scene.frame == "world":
         tf.insert(0, ("world", LEFT_FRAME, T_track_left[:3, 3],
                       _quaternion_xyzw(T_track_left[:3, :3])))
     rec.transforms(0.0, tf)
-    rec.camera_calibration("/stereo/left/calibration", 0.0, calibration.K1,
-                           _five(calibration.D1), width, height, LEFT_FRAME)
-    rec.camera_calibration("/stereo/right/calibration", 0.0, calibration.K2,
-                           _five(calibration.D2), width, height, RIGHT_FRAME)
+    for side, K, D, frame_id in (("left", calibration.K1, calibration.D1, LEFT_FRAME),
+                                 ("right", calibration.K2, calibration.D2, RIGHT_FRAME)):
+        rec.camera_calibration(f"/stereo/{side}/calibration", 0.0, K, _five(D), width, height,
+                               frame_id, image_plane_distance=FRUSTUM_LENGTH)
+
+
+def log_track_frame(rec: StageRecorder, scene: TrackScene, index: int, t: float,
+                    pose: np.ndarray, quality: str, particles: np.ndarray,
+                    previous: np.ndarray | None) -> None:
+    """One frame: the sponge box (a flat square the size of the colour region where only
+    that was measured; removed while lost), the particles, the new piece of the trajectory
+    (from ``previous``, the last frame's position if it was tracked) and the same drawn over
+    both images.
+
+    ``pose`` (4,) x, y, z (m) and yaw (rad) in the track frame; ``quality`` ``box``,
+    ``centroid`` or ``""`` (lost); ``particles`` (m, >= 3) their positions first (NaN rows
+    are skipped).
+    """
+    particles = particles[np.isfinite(particles[:, 0])]
+    if len(particles):
+        rec.points3d("/track/particles", t, particles[:, :3], colors=PARTICLE_COLOUR,
+                     radii=0.0015, frame_id=scene.frame)
+    valid = quality != QUALITY_NONE
+    colour = SPONGE_COLOUR if quality == QUALITY_BOX else QUALITY_COLOURS[QUALITY_CENTROID]
+    if valid:
+        size = scene.box_size(quality)
+        rec.box3d("/track/sponge", t, size, pose[:3],
+                  _quaternion_xyzw(scene.sponge_rotation(pose[3])), color=colour,
+                  frame_id=scene.frame)
+        if previous is not None:
+            rec.line_strip3d("/track/trajectory", t, np.stack([previous, pose[:3]]),
+                             color=TRAJECTORY_COLOUR, frame_id=scene.frame,
+                             entity_id=f"/track/trajectory/{index}")
+    else:
+        rec.box3d("/track/sponge", t, np.zeros(3), None, frame_id=scene.frame)
+    edges = scene.box_edges_px(pose, size) if valid else [np.zeros((0, 2, 2))] * 2
+    dots = scene.particles_px(particles) if len(particles) else [np.zeros((0, 2))] * 2
+    for side, frame_id, lines, points in zip(("left", "right"), (LEFT_FRAME, RIGHT_FRAME),
+                                             edges, dots):
+        rec.image_overlay(f"/stereo/{side}/overlay", t, frame_id, lines,
+                          points[np.isfinite(points).all(axis=1)], colour, PARTICLE_COLOUR)
+
+
+def log_track(rec: StageRecorder, demo: Demo, result: TrackResult, scene: TrackScene,
+              quiet: bool = True) -> None:
+    """Write the run into the MCAP and Rerun recordings of ``rec``."""
+    calibration = demo.calibration
+    width, height = calibration.image_size
+    log_track_setup(rec, scene)
     with tempfile.TemporaryDirectory(prefix="wipelab-track-") as workdir:
         for side, path, frame_id in (("left", demo.left, LEFT_FRAME),
                                      ("right", demo.right, RIGHT_FRAME)):
@@ -373,50 +540,40 @@ def log_track(rec: StageRecorder, demo: Demo, result: TrackResult, quiet: bool =
             rec.video(f"/stereo/{side}/video", video, result.t, frame_id=frame_id)
 
     t, valid = result.t, result.valid
-    rec.scalars("/track/position", t[valid], result.poses[valid, :3], names=["x", "y", "z"])
+    rec.scalars("/track/position", t[valid], result.poses[valid, :3], names=["x", "y", "z"],
+                colors=np.array([XYZ_COLOURS[a] for a in "xyz"]))
+    # Rerun only (the MCAP keeps the tracked frames, what learn reads): a NaN row where the
+    # sponge is lost, so that the plots break there instead of bridging the gap
+    lost = np.flatnonzero(~valid & np.concatenate([[True], valid[:-1]]))
+    if lost.size:
+        rec.rerun.send_columns("/track/position", indexes=[rr.TimeColumn(
+            TIMELINE, duration=seconds_array_to_ns(t[lost]).astype("timedelta64[ns]"))],
+            columns=rr.Scalars.columns(scalars=np.full((lost.size, 3), np.nan)))
     rec.scalars("/track/valid", t, valid.astype(float))
+    quality = np.where(result.quality == QUALITY_NONE, LOST, result.quality)
+    changes = np.flatnonzero(np.concatenate([[True], quality[1:] != quality[:-1]]))
+    rec.states("/track/quality", t[changes], quality[changes].tolist(),
+               {q: QUALITY_COLOURS[q] for q in dict.fromkeys(quality.tolist())})
     rec.scalars("/track/normalised", t[valid], result.normalised[valid], names=["x_norm", "y_norm"])
     rec.scalars("/track/region_area_px", t, result.areas, names=["left", "right"])
     rec.scalars("/track/box_fit", t, (result.quality == QUALITY_BOX).astype(float))
     area = result.area
     rec.json("/track/demonstration_area", 0.0,
              {"lower_left": area.lower_left, "upper_right": area.upper_right,
-              "centre": area.centre, "window_s": list(area.window), "frame": frame},
+              "centre": area.centre, "window_s": list(area.window), "frame": scene.frame},
              "wipelab.DemonstrationArea")
     height_mean = float(np.nanmean(result.poses[valid, 2]))
     (x0, y0), (x1, y1) = area.lower_left, area.upper_right
     rectangle = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1], [x0, y0]])
     rec.line_strip3d("/track/demonstration_area/outline", 0.0,
-                     np.column_stack([rectangle, np.full(5, height_mean)]), color=(90, 160, 255),
-                     frame_id=frame)
-    rec.line_strip3d("/track/trajectory", float(t[-1]), result.poses[valid, :3],
-                     color=(255, 200, 0), frame_id=frame)
-
-    views = ((calibration.left, "left", LEFT_FRAME), (calibration.right, "right", RIGHT_FRAME))
-    T_left_track = invert_transform(T_track_left)
+                     np.column_stack([rectangle, np.full(5, height_mean)]), color=AREA_COLOUR,
+                     frame_id=scene.frame)
+    previous = None
     for k in tqdm(range(len(t)), desc="logs", unit="frame", disable=quiet, file=sys.stderr,
                   leave=False):
-        particles = result.particles[k]
-        particles = particles[np.isfinite(particles[:, 0])]
-        if len(particles):
-            rec.points3d("/track/particles", float(t[k]), particles[:, :3],
-                         colors=(80, 220, 80), radii=0.0015, frame_id=frame)
-        if valid[k]:
-            rec.points3d("/track/sponge", float(t[k]), result.poses[k, :3][None],
-                         colors=(255, 60, 60), radii=0.006, frame_id=frame)
-        for camera, side, frame_id in views:
-            entity = f"/stereo/{side}/overlay"
-            points_left = (particles[:, :3] @ T_left_track[:3, :3].T + T_left_track[:3, 3])
-            rec.rerun.log(f"{entity}/particles", rr.Points2D(camera.project(points_left),
-                                                             colors=(80, 220, 80), radii=1.0))
-            estimate = result.poses[k, :3] @ T_left_track[:3, :3].T + T_left_track[:3, 3]
-            rec.rerun.log(f"{entity}/sponge", rr.Points2D(
-                camera.project(estimate[None]) if valid[k] else np.zeros((0, 2)),
-                colors=(255, 60, 60), radii=4.0))
-    for _, side, frame_id in views:
-        for name in ("particles", "sponge"):
-            rec.rerun.log(f"/stereo/{side}/overlay/{name}",
-                          rr.CoordinateFrame(frame_id + "_image_plane"), static=True)
+        log_track_frame(rec, scene, k, float(t[k]), result.poses[k], str(result.quality[k]),
+                        result.particles[k], previous)
+        previous = result.poses[k, :3] if valid[k] else None
 
 
 def _five(D: np.ndarray) -> np.ndarray:
