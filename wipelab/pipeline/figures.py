@@ -20,8 +20,9 @@ from wipelab.logs.palette import (INPUT_COLOUR, LEARNED_COLOUR, MODE_COLOURS, OS
 INPUT, LEARNED = hex_colour(INPUT_COLOUR), hex_colour(LEARNED_COLOUR)
 #: Reference lines (F0, a true value) and truth: black on the white figures.
 REFERENCE = "0.15"
-#: Shading of what was not observed (a tracking gap) and of a centroid-only frame.
-GAP_SHADE, CENTROID_SHADE = "0.55", "#f0a030"
+#: Shading of what was not observed (a tracking gap), of a frame measured by the colour
+#: region where the box fit failed, and of one measured by one camera alone.
+GAP_SHADE, CENTROID_SHADE, MONO_SHADE = "0.55", "#f0a030", "#be78dc"
 PHASE_TICKS = ([0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi, 2.0 * math.pi],
                ["0", "π/2", "π", "3π/2", "2π"])
 
@@ -56,15 +57,19 @@ def track_figure(t: np.ndarray, position: np.ndarray, valid: np.ndarray,
     truth : ndarray, shape (n, 3), optional
         True x, y, z (m) at the same times (synthetic demos).
     quality : sequence of str, length n, optional
-        Per frame ``box``, ``centroid`` or empty (lost).
+        Per frame ``box``, ``centroid``, ``mono`` or empty (lost). Frames measured by one
+        camera are shaded; colour-region frames only where the box fitted elsewhere (without
+        a known sponge size every frame is a colour-region frame).
     """
     rows = 4 if truth is not None else 3
     figure, axes = _figure(rows, 1.9, width=9.0)
-    centroid = None if quality is None else np.array([q == "centroid" for q in quality])
+    quality = None if quality is None else np.asarray(quality)
     for ax in axes:
         _shade(ax, t, ~valid, GAP_SHADE, "lost")
-        if centroid is not None:
-            _shade(ax, t, centroid, CENTROID_SHADE, "centroid only")
+        if quality is not None:
+            if np.any(quality == "box"):
+                _shade(ax, t, quality == "centroid", CENTROID_SHADE, "box fit failed: centroid")
+            _shade(ax, t, quality == "mono", MONO_SHADE, "one camera")
     for j, axis in enumerate("xyz"):
         ax = axes[j]
         ax.plot(t, np.where(valid, position[:, j], np.nan), color=hex_colour(XYZ_COLOURS[axis]),

@@ -6,7 +6,9 @@ demo.toml), tracks the sponge with :class:`wipelab.vision.tracker.SpongeTracker`
 * ``track.csv``: t, x, y, z (the sponge's point, metres, world frame, or the left camera's
   optical frame when the calibration has no T_world_left), valid (0 while occluded or lost;
   positions are then empty), quality (how the row was measured: ``box`` — the sponge box
-  fitted, its centre; ``centroid`` — the sponge's colour region in both cameras placed on the
+  fitted, its centre; ``mono`` — one camera's colour region placed on the table's plane, the
+  other camera's hidden or cut by the image's edge; ``centroid`` — the sponge's colour region
+  in both cameras placed on the
   table's plane; empty when not valid), yaw (rad, about the table normal; box rows only),
   and the normalised offsets ``x_norm``, ``y_norm`` from the centre of the demonstration
   area (paper Fig. 3);
@@ -48,7 +50,8 @@ from wipelab.sim.kinematics import rotation_about_axis
 from wipelab.vision.projection import invert_transform
 from wipelab.vision.sponge_box import EDGES, SpongeBox, yaw_rotation
 from wipelab.vision.table_plane import table_axes
-from wipelab.vision.tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_NONE, SpongeTracker,
+from wipelab.vision.tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_MONO, QUALITY_NONE,
+                                    SpongeTracker,
                                     TrackerParams)
 from wipelab.vision.video_io import H264Writer, StereoVideoReader
 
@@ -109,7 +112,7 @@ class TrackResult:
         ``centroid`` rows).
     valid : ndarray of bool, shape (n,)
     quality : ndarray of str, shape (n,)
-        ``box``, ``centroid`` or ``""`` per frame (see the module docstring).
+        ``box``, ``centroid``, ``mono`` or ``""`` per frame (see the module docstring).
     area : DemonstrationArea
     normalised : ndarray, shape (n, 2)
     frame : str
@@ -323,7 +326,7 @@ FRUSTUM_LENGTH = 0.1
 #: and its colour in the logs.
 LOST = "lost"
 QUALITY_COLOURS = {QUALITY_BOX: (40, 175, 120), QUALITY_CENTROID: (240, 150, 40),
-                   LOST: (200, 60, 60)}
+                   QUALITY_MONO: (190, 120, 220), LOST: (200, 60, 60)}
 #: Thickness of the flat box drawn where only the colour region was measured, as a fraction
 #: of the region's size.
 REGION_THICKNESS = 0.15
