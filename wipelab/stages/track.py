@@ -26,6 +26,7 @@ from __future__ import annotations
 import os
 import sys
 import tempfile
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -51,7 +52,7 @@ from wipelab.vision.projection import invert_transform
 from wipelab.vision.sponge_box import EDGES, SpongeBox, yaw_rotation
 from wipelab.vision.table_plane import table_axes
 from wipelab.vision.tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_MONO, QUALITY_NONE,
-                                    SpongeTracker,
+                                    FrameEstimate, SpongeTracker,
                                     TrackerParams)
 from wipelab.vision.video_io import H264Writer, StereoVideoReader
 
@@ -263,12 +264,15 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
 
 
 def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: TrackParams,
-                quiet: bool = False) -> TrackResult | None:
+                quiet: bool = False,
+                on_frame: Callable[[int, FrameEstimate], None] | None = None
+                ) -> TrackResult | None:
     """Run ``tracker`` over every frame pair of ``reader``; None if no frame was valid.
 
     Two passes: a warm-up over the first ``params.warmup`` seconds (longer until the sponge
     is found and the plane it moves in is known), then, with what it learnt, the tracking
-    pass from the first frame (so that the first seconds are tracked too).
+    pass from the first frame (so that the first seconds are tracked too). ``on_frame`` is
+    called with each frame's index and estimate of the tracking pass.
     """
     n = reader.frame_count
     poses = np.full((n, 4), np.nan)
@@ -297,6 +301,8 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
             if len(estimate.particles):
                 pick = np.linspace(0, len(estimate.particles) - 1, m).astype(int)
                 particles[k] = estimate.particles[pick]
+            if on_frame is not None:
+                on_frame(k, estimate)
             bar.update()
     if not valid.any():
         return None

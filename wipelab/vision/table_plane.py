@@ -47,7 +47,7 @@ class Plane:
 
     def distance(self, points: np.ndarray) -> np.ndarray:
         """Signed distances (...,) of points (..., 3) from the plane."""
-        return np.asarray(points) @ self.normal - self.offset
+        return _dot(np.asarray(points, dtype=np.float64), self.normal) - self.offset
 
     def basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(origin, e1, e2): the point of the plane nearest the frame's origin and two unit
@@ -69,6 +69,12 @@ class Plane:
     def shifted(self, distance: float) -> "Plane":
         """The parallel plane ``distance`` metres further along the normal."""
         return Plane(self.normal, self.offset + distance, self.residual, self.count)
+
+
+def _dot(points: np.ndarray, vector: np.ndarray) -> np.ndarray:
+    """``points @ vector`` (..., 3) x (3,) without BLAS: the same bits whatever the number
+    of BLAS threads (a multi-threaded sum over many points is not reproducible)."""
+    return np.einsum("...i,i->...", points, vector)
 
 
 def table_axes(normal: np.ndarray) -> np.ndarray:
@@ -116,9 +122,9 @@ def fit_plane(points: np.ndarray, towards: np.ndarray, prior_normal: np.ndarray 
     weights = np.ones(len(points))
     normal, offset, scale = np.array([0.0, 0.0, 1.0]), 0.0, 0.0
     for _ in range(iterations):
-        centre = weights @ points / weights.sum()
+        centre = np.einsum("n,ni->i", weights, points) / weights.sum()
         spread = points - centre
-        scatter = (spread * weights[:, None]).T @ spread
+        scatter = np.einsum("ni,nj->ij", spread * weights[:, None], spread)
         if prior_normal is not None:
             # residual variance of the current fit, floored: the prior's pull in the units
             # of the scatter matrix (see the docstring)
@@ -130,7 +136,7 @@ def fit_plane(points: np.ndarray, towards: np.ndarray, prior_normal: np.ndarray 
         if normal @ (np.asarray(towards) - centre) < 0:
             normal = -normal
         offset = float(normal @ centre)
-        distances = points @ normal - offset
+        distances = _dot(points, normal) - offset
         scale = 1.4826 * float(np.median(np.abs(distances - np.median(distances))))
         if scale <= 1e-9:
             break

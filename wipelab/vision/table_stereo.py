@@ -93,7 +93,9 @@ class TableStereo:
         cx, cy = self.P1[0, 2] * scale, self.P1[1, 2] * scale
         z = f * self.baseline / d
         rectified = np.column_stack([(columns - cx) * z / f, (rows - cy) * z / f, z])
-        points = rectified @ self.R1  # R1 maps left optical to rectified: x_rect = R1 x
+        # R1 maps left optical to rectified (x_rect = R1 x); einsum, not BLAS: the same bits
+        # whatever the number of BLAS threads
+        points = np.einsum("ni,ij->nj", rectified, self.R1)
         return points
 
     def plane_near(self, pairs: list[tuple[np.ndarray, np.ndarray]], near: np.ndarray,
@@ -136,10 +138,11 @@ def ransac_plane(points: np.ndarray, tolerance: float, rng: np.random.Generator,
         if length < 1e-9:
             continue
         normal /= length
-        count = int(np.count_nonzero(np.abs((sample - a) @ normal) < tolerance))
+        count = int(np.count_nonzero(np.abs(np.einsum("ni,i->n", sample - a, normal))
+                                     < tolerance))
         if count > best_count:
             best_count, best_plane = count, (normal, a)
     if best_plane is None:
         return np.zeros(len(points), bool)
     normal, a = best_plane
-    return np.abs((points - a) @ normal) < tolerance
+    return np.abs(np.einsum("ni,i->n", points - a, normal)) < tolerance
