@@ -25,6 +25,7 @@ COMMAND_MODULES = {
     "synth-dataset": "wipelab.cli.pipeline_commands",
     "track": "wipelab.cli.vision_commands",
     "learn": "wipelab.cli.learn_commands",
+    "live": "wipelab.cli.live_commands",
     "rollout": "wipelab.cli.learn_commands",
     "adapt": "wipelab.cli.sim_commands",
     "replay": "wipelab.cli.sim_commands",

@@ -110,6 +110,8 @@ class StageRecorder:
         ``<role>.file`` (base name). Parameters and input hashes make the recording id.
     blueprint : the stage's default Rerun layout; :func:`default_blueprint` if None.
     attachments : name -> file attached to the MCAP (calibration files, configs).
+    sinks : Rerun sinks the recording streams to as well (a viewer watching it live, see
+        :func:`~wipelab.logs.rrd_file.capture_stream`); the ``.rrd`` file is the same.
 
     Attributes
     ----------
@@ -124,7 +126,7 @@ class StageRecorder:
                  parameters: dict[str, Any] | None = None,
                  inputs: dict[str, str | os.PathLike] | None = None,
                  blueprint: rrb.BlueprintLike | None = None,
-                 attachments: dict[str, str | os.PathLike] | None = None):
+                 attachments: dict[str, str | os.PathLike] | None = None, sinks=()):
         directory = Path(directory)
         self.stage = stage
         self.application_id = application_id(stage)
@@ -136,6 +138,7 @@ class StageRecorder:
         self.input_hashes = {role: sha256_file(p) for role, p in input_paths.items()}
         self.recording_id = recording_id(stage, self.parameters, self.input_hashes)
         self._closed = False
+        self._video_streams: set[str] = set()
 
         described_inputs = {}
         for role, p in input_paths.items():
@@ -146,7 +149,8 @@ class StageRecorder:
         layout = deterministic_blueprint(blueprint or default_blueprint(), self.recording_id)
         self._mcap_file = open(self.mcap_path, "wb")  # an unusable directory raises an OSError here
         try:
-            self.rerun = capture_stream(self.application_id, self.recording_id, self._rrd_part, layout)
+            self.rerun = capture_stream(self.application_id, self.recording_id, self._rrd_part,
+                                        layout, sinks)
         except BaseException:
             self._mcap_file.close()
             self.mcap_path.unlink()
@@ -609,6 +613,23 @@ class StageRecorder:
         self.rerun.send_columns(
             entity, indexes=[rr.TimeColumn(TIMELINE, duration=frame_ns.astype("timedelta64[ns]"))],
             columns=rr.VideoFrameReference.columns_nanos(video_ns[:frame_ns.size]))
+
+    def video_sample(self, topic: str, t: float, data: bytes, frame_id: str) -> None:
+        """One access unit of an H.264 Annex B stream (no B-frames) encoded while logging
+        (a live camera; :class:`~wipelab.logs.video_encoder.LiveVideoEncoder`), showing
+        data time ``t``; the images are shown in ``<frame_id>_image_plane``.
+
+        MCAP: ``foxglove.CompressedVideo``. Rerun: ``VideoStream`` (H.264 codec, logged
+        statically with the first sample).
+        """
+        entity = _checked_topic(topic)
+        ns = self._at(t)
+        self._write(topic, ns, fx.compressed_video(ns, data, frame_id, "h264"))
+        if entity not in self._video_streams:
+            self._video_streams.add(entity)
+            self.rerun.log(entity, rr.CoordinateFrame(frame_id + IMAGE_PLANE_SUFFIX),
+                           rr.VideoStream(codec=rr.VideoCodec.H264), static=True)
+        self.rerun.log(entity, rr.VideoStream.from_fields(sample=bytes(data)))
 
     def json(self, topic: str, t: float, message: dict, schema_name: str,
              schema: dict | None = None) -> None:

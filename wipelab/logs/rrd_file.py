@@ -326,13 +326,18 @@ def _canonical_framing(path: Path, old_blueprint_id: bytes, new_blueprint_id: by
 
 
 def capture_stream(application_id: str, recording_id: str, part_path: Path,
-                   blueprint: rrb.Blueprint) -> RecordingStream:
-    """A RecordingStream without wall-clock data that saves to ``part_path`` with ``blueprint``."""
+                   blueprint: rrb.Blueprint, sinks=()) -> RecordingStream:
+    """A RecordingStream without wall-clock data that saves to ``part_path`` with ``blueprint``
+    and streams to ``sinks`` too (``rr.GrpcSink``, ``rr.GrpcServerSink``: a viewer watching
+    while the stage runs)."""
     stream = RecordingStream(application_id, recording_id=recording_id, send_properties=False,
                              batcher_config=CAPTURE_BATCHER)
     stream.set_log_time_enabled(False)
     stream.set_log_tick_enabled(False)
-    stream.save(part_path, default_blueprint=blueprint)
+    if sinks:
+        stream.set_sinks(rr.FileSink(str(part_path)), *sinks, default_blueprint=blueprint)
+    else:
+        stream.save(part_path, default_blueprint=blueprint)
     return stream
 
 

@@ -82,3 +82,40 @@ def measure_demonstration_area(t: np.ndarray, xy: np.ndarray, valid: np.ndarray,
     points = xy[inside]
     return DemonstrationArea(points.min(axis=0), points.max(axis=0),
                              (float(window[0]), float(window[1])))
+
+
+class AreaMeter:
+    """The demonstration area measured online, as a robot watching would (Fig. 3): the
+    rectangle of the valid positions from the first one added until :meth:`freeze`; later
+    positions are normalised by it.
+
+    Attributes
+    ----------
+    area : DemonstrationArea or None
+        The rectangle so far (None before two positions); ``window`` spans the times of the
+        first and the last position it holds.
+    frozen : bool
+    """
+
+    def __init__(self):
+        self.area: DemonstrationArea | None = None
+        self.frozen = False
+        self._first: tuple[float, np.ndarray] | None = None
+
+    def add(self, t: float, xy: np.ndarray) -> None:
+        """Take the valid position ``xy`` (2,) (m) at time ``t`` (s), unless frozen."""
+        if self.frozen:
+            return
+        xy = np.asarray(xy, dtype=np.float64)
+        if self._first is None:
+            self._first = (float(t), xy)
+            return
+        lower = xy if self.area is None else np.minimum(self.area.lower_left, xy)
+        upper = xy if self.area is None else np.maximum(self.area.upper_right, xy)
+        if self.area is None:
+            lower, upper = np.minimum(lower, self._first[1]), np.maximum(upper, self._first[1])
+        self.area = DemonstrationArea(lower, upper, (self._first[0], float(t)))
+
+    def freeze(self) -> None:
+        """Stop measuring: the area is what it is now."""
+        self.frozen = True

@@ -1,0 +1,206 @@
+"""Where a live session's stereo frames come from: a demo directory or two cameras.
+
+Both sources go through one :class:`FrameFeed`: a thread reads frame pairs from the source
+and hands them to the session through a buffer of a few pairs, as a camera driver does.
+
+* ``realtime`` (``--speed 1``): a pair is available from its arrival time on (a file's frame
+  k at k / fps after the start; a camera's when it was grabbed). A session that falls
+  behind finds several pairs waiting: it takes the oldest (late: a newer one has arrived
+  already), and when more than ``buffer`` are waiting the oldest are dropped. Dropped pairs
+  are counted and leave a gap in the frame numbers (the learner is told these samples were
+  not observed); nothing is skipped silently.
+* otherwise (``--speed max``): every pair is delivered, as fast as the session takes them
+  (the reading thread waits for room in the buffer): the same frames on every run.
+
+A pair's number is its index on the source's clock (time = index / fps): a file's frame
+index, a camera's count of grabbed pairs.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections import deque
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Pairs a feed holds for the session before it drops the oldest (real time).
+DEFAULT_BUFFER = 8
+
+
+@dataclass(frozen=True)
+class FramePair:
+    """One synchronised stereo pair.
+
+    Attributes
+    ----------
+    index : int
+        Frame number on the source's clock (time = index / fps).
+    left, right : ndarray, shape (h, w, 3)
+        BGR uint8 images.
+    arrived : float
+        ``time.perf_counter()`` when the pair became available to the session (s).
+    """
+
+    index: int
+    left: np.ndarray
+    right: np.ndarray
+    arrived: float
+
+
+class FrameFeed:
+    """Frame pairs from ``pairs``, read on a thread and handed over through a buffer.
+
+    Parameters
+    ----------
+    pairs : callable
+        Returns the iterator of (left, right) BGR pairs (called on the reading thread); it
+        may raise (e.g. InputError for a truncated video): the error is raised to the
+        session by :meth:`next`.
+    fps : float
+        Frame rate of the source (Hz).
+    realtime : bool
+        See the module docstring.
+    paced : bool
+        Hold pair k back until k / fps after :meth:`start` (a file played at its frame rate;
+        a camera paces itself).
+    buffer : int
+        Pairs held before the oldest are dropped (real time only).
+    close : callable, optional
+        Called when the feed stops (releases cameras).
+    """
+
+    def __init__(self, pairs: Callable[[], Iterator[tuple[np.ndarray, np.ndarray]]],
+                 fps: float, realtime: bool, paced: bool, buffer: int = DEFAULT_BUFFER,
+                 close: Callable[[], None] | None = None):
+        self.fps = float(fps)
+        self.realtime, self.paced = realtime, paced
+        self.buffer = int(buffer)
+        self.dropped = 0
+        self._pairs, self._close = pairs, close
+        self._queue: deque[FramePair | BaseException | None] = deque()
+        self._ready = threading.Condition()
+        self._halt = threading.Event()
+        self._thread = threading.Thread(target=self._read, daemon=True, name="wipelab-frames")
+        self.start_time = math.nan
+
+    def start(self) -> None:
+        """Start reading (the source's clock starts now)."""
+        self.start_time = time.perf_counter()
+        self._thread.start()
+
+    def next(self) -> FramePair | None:
+        """The oldest waiting pair (blocks until one arrives); None at the end of the source."""
+        with self._ready:
+            while not self._queue:
+                self._ready.wait()
+            item = self._queue.popleft()
+            self._ready.notify_all()
+        if isinstance(item, BaseException):
+            raise item
+        return item
+
+    def waiting(self) -> int:
+        """Pairs waiting in the buffer (a session that finds any is behind)."""
+        with self._ready:
+            return sum(isinstance(item, FramePair) for item in self._queue)
+
+    def stop(self) -> None:
+        """Stop reading and release the source (idempotent)."""
+        self._halt.set()
+        with self._ready:
+            self._queue.clear()
+            self._ready.notify_all()
+        if self._thread.ident is not None:
+            self._thread.join(timeout=10.0)
+        if self._close is not None:
+            self._close()
+            self._close = None
+
+    def _read(self) -> None:
+        try:
+            for index, (left, right) in enumerate(self._pairs()):
+                if self._halt.is_set():
+                    return
+                arrived = self._arrival(index)
+                if arrived is None:
+                    return
+                self._put(FramePair(index, left, right, arrived))
+            self._put(None)
+        except BaseException as error:  # handed to the session
+            self._put(error)
+
+    def _arrival(self, index: int) -> float | None:
+        """When pair ``index`` becomes available (waits for it when paced); None if stopped."""
+        now = time.perf_counter()
+        if not self.paced:
+            return now
+        due = self.start_time + index / self.fps
+        if due > now and self._halt.wait(due - now):
+            return None
+        return max(due, now)
+
+    def _put(self, item) -> None:
+        with self._ready:
+            if isinstance(item, FramePair):
+                while not self.realtime and len(self._queue) >= self.buffer \
+                        and not self._halt.is_set():
+                    self._ready.wait()
+                while self.realtime and len(self._queue) >= self.buffer:
+                    self._queue.popleft()
+                    self.dropped += 1
+            self._queue.append(item)
+            self._ready.notify_all()
+
+
+def demo_feed(reader, realtime: bool, buffer: int = DEFAULT_BUFFER) -> FrameFeed:
+    """The pairs of a demo directory's videos (a :class:`~wipelab.vision.video_io.
+    StereoVideoReader`), at their frame rate when ``realtime``."""
+    return FrameFeed(lambda: iter(reader), reader.fps, realtime, paced=realtime, buffer=buffer)
+
+
+def is_stream(spec: str) -> bool:
+    """Whether a ``--camera`` entry names a device or a stream (an OpenCV device index, a
+    URL) rather than a video file."""
+    return spec.isdigit() or "://" in spec
+
+
+def open_capture(spec: str, expected_size: tuple[int, int]):
+    """An OpenCV capture of one ``--camera`` entry, checked: it opens and delivers frames of
+    the calibration's size (InputError otherwise). Returns (capture, fps, is_file)."""
+    import cv2
+
+    from wipelab.errors import InputError
+    from wipelab.input_files import check_readable
+
+    stream = is_stream(spec)
+    if not stream:
+        check_readable(spec)
+    capture = cv2.VideoCapture(int(spec)) if spec.isdigit() else \
+        cv2.VideoCapture(spec, cv2.CAP_FFMPEG)
+    if not capture.isOpened():
+        raise InputError(f"--camera: {spec}: cannot be opened by OpenCV")
+    width = int(capture.get(cv2.CAP_PROP_FRAME_WIDTH))
+    height = int(capture.get(cv2.CAP_PROP_FRAME_HEIGHT))
+    if (width, height) != tuple(expected_size):
+        capture.release()
+        raise InputError(f"--camera: {spec}: frames are {width}x{height}, the calibration is "
+                         f"for {expected_size[0]}x{expected_size[1]}")
+    fps = float(capture.get(cv2.CAP_PROP_FPS))
+    return capture, fps, not stream
+
+
+def camera_pairs(captures) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """Pairs from two OpenCV captures: both grabbed first (as close in time as the devices
+    allow), then decoded; ends when either ends."""
+    while True:
+        grabbed = [capture.grab() for capture in captures]
+        if not all(grabbed):
+            return
+        frames = [capture.retrieve()[1] for capture in captures]
+        if any(frame is None for frame in frames):
+            return
+        yield frames[0], frames[1]

@@ -1,0 +1,74 @@
+"""Keeping up with the video: the session's clock, per-frame latency, late and dropped frames.
+
+Latency of a frame: from when its pair arrived (became available to the session: a file's
+frame at its time in the video, a camera's when grabbed) to the robot's first command computed
+with it, so time spent waiting in the frame buffer counts. A frame is late when a newer pair
+had arrived already when the session took it; dropped when the buffer overflowed (see
+:mod:`wipelab.live.frames`). The real-time factor is the session time covered over the wall
+time it took; ``busy`` is the fraction of that wall time spent working (the rest waiting for
+frames or for the clock).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+
+class SessionClock:
+    """Wall time against session time. ``realtime``: :meth:`wait_until` sleeps until the
+    session time is due (``--speed 1``); otherwise it returns at once (``--speed max``)."""
+
+    def __init__(self, realtime: bool, start: float | None = None):
+        self.realtime = realtime
+        self.start = time.perf_counter() if start is None else start
+        self.waited = 0.0
+
+    def elapsed(self) -> float:
+        """Wall seconds since the start."""
+        return time.perf_counter() - self.start
+
+    def wait_until(self, t: float) -> None:
+        """Return when session time ``t`` (s) is due."""
+        if not self.realtime:
+            return
+        delay = self.start + t - time.perf_counter()
+        if delay > 0:
+            time.sleep(delay)
+            self.waited += delay
+
+
+class FrameTimes:
+    """Per-frame latency and late frames of a session."""
+
+    def __init__(self):
+        self.latencies: list[float] = []
+        self.late = 0
+        self.waited = 0.0
+
+    def add(self, arrived: float, commanded: float, late: bool) -> None:
+        """A frame that arrived at ``arrived`` and drove the robot's command at
+        ``commanded`` (``time.perf_counter()`` seconds)."""
+        self.latencies.append(commanded - arrived)
+        self.late += bool(late)
+
+    def summary(self, dropped: int, expected: int, session_s: float, wall_s: float,
+                waited_s: float) -> dict:
+        """metrics.json's ``timing``: latency p50 / p99 / max (ms), frames processed, late
+        and dropped (and their share of the frames the source delivered or dropped),
+        real-time factor, busy fraction and frames per second of wall time."""
+        latency = np.asarray(self.latencies) * 1000.0
+        processed = len(self.latencies)
+        total = max(expected, processed + dropped, 1)
+        return {
+            "frames": processed, "late_frames": self.late, "dropped_frames": dropped,
+            "dropped_fraction": dropped / total, "late_fraction": self.late / total,
+            "latency_ms": {"p50": float(np.percentile(latency, 50)) if processed else None,
+                           "p99": float(np.percentile(latency, 99)) if processed else None,
+                           "max": float(latency.max()) if processed else None},
+            "session_time_s": session_s, "wall_time_s": wall_s,
+            "real_time_factor": session_s / wall_s if wall_s > 0 else None,
+            "busy_fraction": (wall_s - waited_s) / wall_s if wall_s > 0 else None,
+            "frames_per_second": processed / wall_s if wall_s > 0 else None,
+        }

@@ -1,0 +1,392 @@
+"""The live stage: the paper's on-line chain, one frame at a time, in one process.
+
+A person wipes in front of the cameras (a demo directory played at its frame rate, or two
+cameras); for every frame pair:
+
+    tracker (:class:`~wipelab.vision.tracker.SpongeTracker`, one step)
+      -> one sample into the online learner (:class:`~wipelab.live.imitation.Imitation`)
+      -> the simulated ARMAR-IIIb executes the movement learned so far, phase-locked to the
+         person, in the air above the table (:class:`~wipelab.live.robot.LiveRobot`, the
+         control periods up to the next frame)
+      -> the logs (:class:`~wipelab.live.live_log.LiveLog`), streamed to a viewer.
+
+When imitation learning ends (:mod:`wipelab.live.imitation` lists when: the end of the
+demonstration, the user's word, ``--learn-periods``, or a learned waveform that stopped
+changing) the robot slows down, moves down until contact, learns the force profile and wipes
+at ``--replay-scale`` times the demonstrated tempo, on the same clock (at ``--speed 1`` in
+real time).
+
+Outputs, in the formats of the batch stages so that every other command can take over:
+``track.csv`` (one row per frame of the demonstration, dropped frames as invalid rows),
+``model.json`` (as ``learn``'s), ``adapted_model.json`` (as ``adapt``'s), ``metrics.json``
+(timing, imitation, following, adapt, replay), ``live.mcap``, ``live.rrd``, ``manifest.json``.
+At ``--speed max`` the files are the same on every run (the wall-clock measurements, which
+are not, are printed instead of written).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from wipelab.errors import InputError
+from wipelab.live.following import following_metrics
+from wipelab.live.frames import FrameFeed, camera_pairs, demo_feed, is_stream, open_capture
+from wipelab.live.imitation import Imitation, ImitationParams
+from wipelab.live.live_log import DEMONSTRATION_FRAME, LiveLog, live_blueprint
+from wipelab.live.robot import Following, LiveRobot, RobotParams
+from wipelab.live.stop_requests import StopRequests
+from wipelab.live.timing import FrameTimes, SessionClock
+from wipelab.live.viewer import parse_viewer, viewer_sinks
+from wipelab.logs import StageRecorder
+from wipelab.manifest import build_manifest, write_json
+from wipelab.stage_output import staged_output
+from wipelab.stages.adapt import AdaptParams, adapt_metrics, json_parameters
+from wipelab.stages.replay import run_metrics
+from wipelab.stages.track import (TrackParams, TrackScene, colour_source, open_demo, sponge_box,
+                                  tracked_table_axes, tracked_csv_columns)
+from wipelab.trajectory_csv import write_trajectory
+from wipelab.vision.calibration import load_calibration
+from wipelab.vision.tracker import QUALITY_NONE, SpongeTracker, TrackerParams
+
+SPEEDS = ("1", "max")
+
+
+@dataclass(frozen=True)
+class LiveSource:
+    """Where the frames come from: a demo directory, or two cameras (OpenCV device indices,
+    stream URLs or video files) with their calibration file."""
+
+    demo: Path | None = None
+    cameras: tuple[str, str] | None = None
+    calibration: Path | None = None
+
+    def describe(self) -> str:
+        return str(self.demo) if self.demo is not None else ",".join(self.cameras)
+
+
+@dataclass(frozen=True)
+class LiveParams:
+    """Parameters of ``wipelab live`` (CLI flags in brackets)."""
+
+    speed: str = "1"                      # [--speed] 1: the source's frame rate; max: at once
+    viewer: str = "none"                  # [--viewer] none, spawn, serve[=PORT], connect=ADDR
+    fps: float | None = None              # [--fps] of cameras that do not report theirs
+    track: TrackParams = field(default_factory=TrackParams)
+    imitation: ImitationParams = field(default_factory=ImitationParams)
+    robot: RobotParams = field(default_factory=RobotParams)
+
+    def __post_init__(self):
+        if self.speed not in SPEEDS:
+            raise InputError(f"--speed: must be 1 or max, got {self.speed!r}")
+        parse_viewer(self.viewer)
+
+    @property
+    def realtime(self) -> bool:
+        return self.speed == "1"
+
+
+@dataclass
+class _Opened:
+    """A checked source: the frame feed (not started), the calibration and its file, the
+    demo's metadata, the input files for the manifest."""
+
+    feed: FrameFeed
+    calibration: object
+    calibration_path: Path
+    metadata: dict
+    inputs: dict
+
+
+def _open_source(source: LiveSource, params: LiveParams) -> _Opened:
+    """Check the source before anything runs (InputError naming what is wrong)."""
+    if source.demo is not None:
+        demo = open_demo(source.demo)
+        return _Opened(demo_feed(demo.reader, params.realtime), demo.calibration,
+                       demo.calibration_path, demo.metadata,
+                       {"left_video": demo.left, "right_video": demo.right,
+                        "calibration": demo.calibration_path})
+    calibration = load_calibration(source.calibration)
+    if params.speed == "max" and any(is_stream(spec) for spec in source.cameras):
+        raise InputError("--speed: max needs video files (a camera delivers frames at its "
+                         "own rate); use --speed 1")
+    opened = []
+    try:
+        for spec in source.cameras:
+            opened.append(open_capture(spec, calibration.image_size))
+    except BaseException:
+        for capture, _, _ in opened:
+            capture.release()
+        raise
+    rates = [fps for _, fps, _ in opened]
+    fps = params.fps or (rates[0] if rates[0] > 0 else 0.0)
+    if not fps > 0:
+        for capture, _, _ in opened:
+            capture.release()
+        raise InputError(f"--camera: {source.cameras[0]}: the camera does not report its frame "
+                         "rate; give it with --fps")
+    captures = [capture for capture, _, _ in opened]
+    files = all(is_file for _, _, is_file in opened)
+    feed = FrameFeed(lambda: camera_pairs(captures), fps, params.realtime,
+                     paced=params.realtime and files,
+                     close=lambda: [capture.release() for capture in captures])
+    inputs = {"calibration": source.calibration}
+    if files:
+        inputs |= {"left_video": Path(source.cameras[0]), "right_video": Path(source.cameras[1])}
+    return _Opened(feed, calibration, source.calibration, {}, inputs)
+
+
+def run_live(source: LiveSource, out_dir: str | os.PathLike, params: LiveParams = LiveParams(),
+             quiet: bool = False, listen_stdin: bool = True) -> dict:
+    """Run a live session and write its outputs into ``out_dir`` (all or nothing).
+
+    Returns the metrics (also in ``metrics.json``), with the wall-clock ``timing`` also at
+    ``--speed max``.
+
+    Raises
+    ------
+    InputError
+        A bad source, calibration, colour option, surface or viewer; a sponge that was never
+        found; a movement the learner never locked onto.
+    """
+    opened = _open_source(source, params)
+    try:
+        toml_name = f"{source.demo}/demo.toml" if source.demo is not None else "--color"
+        colour = colour_source(params.track, opened.metadata, toml_name)
+        sponge = sponge_box(params.track, opened.metadata, toml_name)
+        sinks = viewer_sinks(params.viewer)
+        robot = LiveRobot(params.robot)
+    except BaseException:
+        opened.feed.stop()
+        raise
+    try:
+        tracker = SpongeTracker(opened.calibration, colour, TrackerParams(
+            particles=params.track.particles, seed=params.track.seed, sponge=sponge))
+        parameters = json_parameters(params) | {"source": source.describe(),
+                                                "colour_source": colour.option}
+        with staged_output(out_dir) as tmp:
+            with StageRecorder(tmp, "live", parameters, opened.inputs,
+                               live_blueprint(params.imitation.dofs),
+                               {"calibration.yaml": opened.calibration_path}, sinks) as rec, \
+                    StopRequests(stdin=listen_stdin) as requests:
+                scene = TrackScene(opened.calibration, DEMONSTRATION_FRAME, np.eye(3),
+                                   None if sponge is None else
+                                   (sponge.length, sponge.width, sponge.height), math.nan)
+                session = _Session(opened.feed, tracker, robot, params, scene, rec, requests,
+                                   quiet)
+                session.run(source)
+            metrics = session.outputs(tmp, source, parameters, opened.inputs)
+    finally:
+        opened.feed.stop()
+        robot.close()
+    return metrics
+
+
+class _Session:
+    """The frame loop and what it records (see the module docstring)."""
+
+    def __init__(self, feed: FrameFeed, tracker: SpongeTracker, robot: LiveRobot,
+                 params: LiveParams, scene: TrackScene, rec: StageRecorder,
+                 requests: StopRequests, quiet: bool):
+        self.feed, self.tracker, self.robot, self.params = feed, tracker, robot, params
+        self.fps = feed.fps
+        self.imitation = Imitation(self.fps, params.imitation)
+        self.log = LiveLog(rec, scene, robot, params.imitation.dofs, self.fps, params.realtime)
+        self.requests, self.quiet = requests, quiet
+        self.times = FrameTimes()
+        self.rows: list[tuple] = []       # per frame: pose (4,), valid, quality
+        self.hand: list[np.ndarray] = []  # per frame: the robot's hand x-y (m, world)
+        self.clock: SessionClock | None = None
+        self.imitating = False
+
+    # -- imitation: one frame at a time -----------------------------------------------------
+    def run(self, source: LiveSource) -> None:
+        feed, imitation = self.feed, self.imitation
+        feed.start()
+        self.clock = SessionClock(self.params.realtime, feed.start_time)
+        with tqdm(desc="live: imitating", unit="frame", disable=self.quiet, file=sys.stderr,
+                  leave=False) as bar:
+            while imitation.stop_reason is None:
+                if self.requests.reason is not None:
+                    imitation.request_stop(self.requests.reason)
+                pair = feed.next()
+                if pair is None:
+                    imitation.request_stop("end of the video")
+                    break
+                self._frame(pair)
+                bar.update()
+        if not imitation.locked:
+            self._never_locked(source)
+        feed.stop()
+        self._finish_imitation()
+        with tqdm(desc="live: learning the surface", unit="s", disable=self.quiet,
+                  file=sys.stderr, leave=False) as bar:
+            self._robot_only(bar)
+
+    def _frame(self, pair) -> None:
+        late = self.params.realtime and self.feed.waiting() > 0
+        for index in range(len(self.rows), pair.index):    # dropped by the frame buffer
+            self._advance(index, np.full(4, np.nan), False, "")
+            self.log.dropped(index / self.fps)
+        estimate = self.tracker.step(pair.left, pair.right)
+        if self.tracker.ready and not np.isfinite(self.log.scene.region_size):
+            self._scene_known()
+        self._advance(pair.index, estimate.pose, estimate.valid, estimate.quality)
+        commanded = time.perf_counter()
+        self.times.add(pair.arrived, commanded, late)
+        t = pair.index / self.fps
+        if self.params.realtime:
+            self.log.latency(t, commanded - pair.arrived)
+        self.log.frame(t, pair, estimate, self.imitation, self.hand[-1])
+        self.log.robot_trace()
+
+    def _advance(self, index: int, pose: np.ndarray, valid: bool, quality: str) -> None:
+        """One sample into the learner, then the robot up to the next frame."""
+        imitation, robot = self.imitation, self.robot
+        imitation.step(pose[:2], valid)
+        t = index / self.fps
+        if imitation.locked and not self.imitating:
+            self.imitating = True
+            robot.imitate(imitation.area.centre, imitation.area.half_size)
+        if self.imitating:
+            learner = imitation.learner
+            robot.follow(Following(t, learner.output.copy(),
+                                   learner.omega * learner.state.velocity))
+        robot.advance(t + 1.0 / self.fps)
+        self.rows.append((np.asarray(pose, dtype=float), bool(valid), quality))
+        self.hand.append(np.asarray(robot.task.session.trace.last("tcp")[:2], dtype=float))
+
+    def _scene_known(self) -> None:
+        """The tracker has found the sponge and its plane: draw it at its size and turn."""
+        from dataclasses import replace
+
+        self.log.scene = replace(self.log.scene, R_track_table=tracked_table_axes(self.tracker),
+                                 region_size=float(self.tracker.region.size))
+
+    def _never_locked(self, source: LiveSource) -> None:
+        tracked = sum(valid for _, valid, _ in self.rows)
+        if not self.tracker.identified:
+            raise InputError(f"{source.describe()}: the sponge was never found (nothing of its "
+                             f"colour moved like a wiping sponge in both cameras in "
+                             f"{len(self.rows)} frames); give its colour with --color or --hsv")
+        raise InputError(f"{source.describe()}: the learner never locked onto a periodic "
+                         f"movement ({tracked} of {len(self.rows)} frames tracked; it needs "
+                         f"about two periods without a gap)")
+
+    def _finish_imitation(self) -> None:
+        imitation, learner = self.imitation, self.imitation.learner
+        t_last = (len(self.rows) - 1) / self.fps
+        self.model = imitation.model(self._model_source())
+        phase = learner.phase + learner.omega * (self.robot.time - t_last)
+        self.robot.finish(self.model, phase)
+        self.log.flush()
+
+    # -- after the demonstration: the robot alone, on the same clock -------------------------
+    def _robot_only(self, bar) -> None:
+        t = self.robot.time
+        step = 1.0 / self.fps
+        frames = 0
+        while self.robot.advance(t + step):
+            t += step
+            self.clock.wait_until(t)
+            frames += 1
+            if frames % 4 == 0:
+                self.log.robot_trace()
+            if frames % 15 == 0:
+                self.log.flush()
+                bar.update(15 * step)
+        self.log.robot_trace(final=True)
+        self.log.flush()
+        self.wall_s = self.clock.elapsed()
+
+    # -- outputs ---------------------------------------------------------------------------
+    def _model_source(self) -> dict:
+        imitation = self.imitation
+        return {"stage": "live", "reference_dof": imitation.params.dofs[
+            imitation.learner.settings.reference]}
+
+    def outputs(self, tmp: Path, source: LiveSource, parameters: dict, inputs: dict) -> dict:
+        """Write track.csv, model.json, adapted_model.json, metrics.json and manifest.json
+        into ``tmp``; returns the metrics with the wall-clock timing."""
+        imitation, robot = self.imitation, self.robot
+        t = np.arange(len(self.rows)) / self.fps
+        poses = np.array([pose for pose, _, _ in self.rows])
+        valid = np.array([v for _, v, _ in self.rows])
+        quality = np.array([q for _, _, q in self.rows], dtype="<U8")
+        normalised = np.where(valid[:, None], imitation.area.normalise(poses[:, :2]), np.nan)
+        write_trajectory(tmp / "track.csv", t,
+                         tracked_csv_columns(poses, valid, quality, normalised))
+        write_json(tmp / "model.json", self.model.to_dict())
+        metrics = {"format": "wipelab.live_metrics/1",
+                   "frames": self._frame_counts(),
+                   "imitation": self._imitation_metrics(),
+                   "following": following_metrics(
+                       t, imitation.area.normalise(np.where(valid[:, None], poses[:, :2],
+                                                            np.nan)),
+                       imitation.area.normalise(robot.in_demonstration(np.array(self.hand))),
+                       self.model.frequency_hz, imitation.lock_time, imitation.first_tracked,
+                       imitation.stop_time)}
+        metrics.update(self._robot_metrics(tmp, parameters))
+        timing = self.times.summary(self.feed.dropped, len(self.rows),
+                                    robot.time, self.wall_s, self.clock.waited)
+        if self.params.realtime:
+            metrics["timing"] = timing
+        write_json(tmp / "metrics.json", metrics)
+        write_json(tmp / "manifest.json", build_manifest("live", inputs, parameters,
+                                                         self.params.track.seed))
+        return metrics | {"timing": timing}
+
+    def _frame_counts(self) -> dict:
+        processed = len(self.times.latencies)
+        total = len(self.rows)
+        return {"total": total, "processed": processed, "dropped": total - processed,
+                "late": self.times.late, "fps": self.fps}
+
+    def _imitation_metrics(self) -> dict:
+        imitation = self.imitation
+        area = imitation.area
+        return {"first_tracked_s": imitation.first_tracked, "lock_s": imitation.lock_time,
+                "converged_s": None if math.isnan(imitation.converged_time)
+                else imitation.converged_time,
+                "stop_s": imitation.stop_time, "stop_reason": imitation.stop_reason,
+                "periods_since_lock": imitation.periods,
+                "frequency_hz": self.model.frequency_hz,
+                "tempo_changes": imitation.learner.tempo_changes,
+                "demonstration_area": {"lower_left": area.lower_left.tolist(),
+                                       "upper_right": area.upper_right.tolist(),
+                                       "window_s": list(area.window)},
+                "robot_scale": self.robot.scale}
+
+    def _robot_metrics(self, tmp: Path, parameters: dict) -> dict:
+        robot = self.robot
+        out = {"placement": robot.placement, "safety_stop": robot.stop_reason,
+               "sim_time_s": robot.time}
+        run = robot.adaptation
+        if run is None or robot.adapted is None:
+            return out
+        trace = robot.task.session.trace.arrays()
+        adapt_params = AdaptParams(surface=self.params.robot.surface,
+                                   force=self.params.robot.force,
+                                   feedback=self.params.robot.feedback,
+                                   learning=self.params.robot.adaptation.learning)
+        surface_entry = {"spec": self.params.robot.surface, **robot.task.surface.describe(),
+                         "placement": robot.placement,
+                         "learning_frequency_hz": run.learning_omega / (2.0 * math.pi),
+                         "tempos_hz": sorted(run.heights),
+                         "target_force_n": self.params.robot.force,
+                         "feedback": self.params.robot.feedback}
+        adapted = run.adapted_model({"stage": "live", "parameters": parameters}, surface_entry)
+        write_json(tmp / "adapted_model.json", adapted.to_dict())
+        out["adapt"] = adapt_metrics(robot.adapt_task, run, trace, adapted, adapt_params)
+        if robot.replay_run is not None:
+            out["replay"] = {"scale": self.params.robot.replay_scale, "mode": "learned",
+                             **run_metrics(robot.adapt_task, trace, robot.replay_run,
+                                           self.params.robot.force)}
+        return out
