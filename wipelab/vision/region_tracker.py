@@ -69,7 +69,10 @@ class RegionTrackerParams:
         median.
     max_ray_disagreement : float
         Largest change, in multiples of the sponge size, of the offset between the two
-        cameras' rays on the plane from its running median.
+        cameras' rays on the plane from its running median; once 30 frames are known, up to
+        1.5 times the 98th percentile of the changes seen (views far apart see the sponge's
+        faces differently as it moves), at most ``ray_disagreement_ceiling``.
+    ray_disagreement_ceiling : float
     coast_frames : int
         Frames the window keeps following the prediction after a failed measurement before
         the search covers the whole image again.
@@ -95,6 +98,7 @@ class RegionTrackerParams:
     area_floor: float = 0.5
     area_ceiling: float = 2.0
     max_ray_disagreement: float = 0.12
+    ray_disagreement_ceiling: float = 0.4
     coast_frames: int = 6
     acquisition: AcquisitionParams = AcquisitionParams()
     colour_refresh: int = 60
@@ -218,6 +222,8 @@ class RegionTracker:
         self._table_points: list[np.ndarray] = []  # dense stereo points of the table pairs
         self._table_centre: np.ndarray | None = None
         self.ray_offsets: deque[np.ndarray] = deque(maxlen=90)
+        self.ray_changes: deque[float] = deque(maxlen=120)  # of accepted frames, / size
+        self._ray_change: float | None = None
         self.areas = [deque(maxlen=120), deque(maxlen=120)]  # metric areas of valid frames
         self.history: deque[tuple[int, np.ndarray]] = deque(maxlen=3)
         self.failures = 0
@@ -357,7 +363,9 @@ class RegionTracker:
             blobs = [b for b in find_blobs(probability, min_area=4)
                      if np.linalg.norm(b.centroid - centre) < reach + b.radius]
             mask = np.zeros(window.shape[:2], np.uint8)
-            mask[blob_mask(probability, blobs, grow=0)] = 255
+            # the sponge's colour is learnt from the pixels well inside the named colour only:
+            # the soft edge of the prior may take in a hand of a near hue
+            mask[blob_mask(probability, blobs, grow=0) & (probability > 0.99)] = 255
             masks.append(mask)
             windows.append(window)
         self.model = ColourModel.fit(windows, masks) if all(m.any() for m in masks) \
@@ -468,6 +476,7 @@ class RegionTracker:
             problems[k] = "at the edge of the image" if truncated else ""
         metric_areas = np.array([area * (view.depth(predicted) / view.focal) ** 2
                                  for area, view in zip(areas, self.views)])
+        self._learn_area_range(problems, rays, metric_areas)
         for k in range(2):
             if not problems[k] and len(self.areas[k]) >= 5:
                 low, median, high = np.percentile(self.areas[k], [2, 50, 98])
@@ -489,11 +498,11 @@ class RegionTracker:
             reason = self._disagreement(rays)
             if not reason:
                 point = self._locate(rays, stereo)
-        elif len(good) == 1:
+        elif len(good) == 1 and self._mono_allowed(good[0], metric_areas[good[0]]):
             point = self._locate_mono(good[0], rays[good[0]])
             quality = QUALITY_MONO
             if point is not None and \
-                    np.linalg.norm(point - predicted) > 0.5 * self.size + slack:
+                    np.linalg.norm(point - predicted) > 0.3 * self.size + slack:
                 point, reason = None, reason + "; the one camera's region jumped"
         if point is None:
             return self._fail(rays, areas, stereo, reason or "no plane yet for one camera")
@@ -552,6 +561,21 @@ class RegionTracker:
         cameras = [(view.R, view.t, view.focal) for view in self.views]
         return points_on_plane(plane, [rays[:1], rays[1:]], cameras)[0]
 
+    def _learn_area_range(self, problems, rays, metric_areas) -> None:
+        """Learn the range the region's area spans from every frame in which both cameras
+        show a whole region whose rays agree and whose area is within the floor and ceiling
+        of the median (the sponge turning, the holding hand moving on it), whether or not the
+        frame is then accepted; a hand passing in front is too rare to widen it much."""
+        p = self.params
+        if any(problems) or len(self.areas[0]) < 5 or self._disagreement(rays):
+            return
+        for k in range(2):
+            ratio = metric_areas[k] / np.median(self.areas[k])
+            if not p.area_floor <= ratio <= p.area_ceiling:
+                return
+        for k in range(2):
+            self.areas[k].append(metric_areas[k])
+
     def _disagreement(self, rays: np.ndarray) -> str:
         """Why the two cameras' regions cannot show the same sponge ("" if they can): where
         their rays meet the plane must differ as usual (a hand hiding part of the sponge in
@@ -559,11 +583,27 @@ class RegionTracker:
         plane = self.sponge_plane()
         if plane is None or len(self.ray_offsets) < 5:
             return ""
+        p = self.params
         typical = np.median(np.array(self.ray_offsets), axis=0)
-        if np.linalg.norm(self._ray_offset(plane, rays) - typical) > \
-                self.params.max_ray_disagreement * self.size:
+        change = np.linalg.norm(self._ray_offset(plane, rays) - typical) / self.size
+        limit = p.max_ray_disagreement
+        if len(self.ray_changes) >= 30:
+            limit = min(p.ray_disagreement_ceiling,
+                        max(limit, 1.5 * float(np.percentile(self.ray_changes, 98))))
+        if change > limit:
             return "the cameras' regions disagree"
+        self._ray_change = change
         return ""
+
+    def _mono_allowed(self, k: int, metric_area: float) -> bool:
+        """Whether camera k alone may stand for both: only to continue a track that was
+        valid on the previous frame, with a region of its usual area (a hand hiding the
+        sponge in one camera may show something of a near colour in the other)."""
+        p = self.params
+        if not self.history or self.history[-1][0] != self.frame - 1 or len(self.areas[k]) < 5:
+            return False
+        ratio = metric_area / np.median(self.areas[k])
+        return p.min_area_ratio <= ratio <= p.max_area_ratio
 
     def _locate_mono(self, k: int, ray: np.ndarray) -> np.ndarray | None:
         """The sponge point from camera k alone: where its ray meets the plane, moved by half
@@ -591,7 +631,8 @@ class RegionTracker:
         self.failures = 0
         self.valid_count += 1
         for k in good:
-            self.areas[k].append(areas[k])
+            if len(self.areas[k]) < 5:  # the first ones; then _learn_area_range adds them
+                self.areas[k].append(areas[k])
         if self.valid_count % 30 == 0 and self.areas[0] and self.areas[1]:
             # the sponge's size as it is measured now (its first estimate came from a few
             # low-resolution frames)
@@ -605,6 +646,9 @@ class RegionTracker:
         plane = self.sponge_plane()
         if plane is not None and len(good) == 2:
             self.ray_offsets.append(self._ray_offset(plane, rays))
+            if self._ray_change is not None:
+                self.ray_changes.append(self._ray_change)
+        self._ray_change = None
 
     def _fail(self, rays, areas, stereo, reason: str) -> RegionEstimate:
         self.failures += 1
