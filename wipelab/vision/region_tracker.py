@@ -87,6 +87,9 @@ class RegionTrackerParams:
     table_every : int
     table_radius : float
         The table is measured within this distance of the sponge, metres.
+    max_height : float
+        A moving thing of the sponge's colour whose centre keeps higher than this above the
+        table is not the sponge (a hand or sleeve of a near colour), metres.
     """
 
     search_width: int = 320
@@ -106,6 +109,7 @@ class RegionTrackerParams:
     table_pairs: int = 6
     table_every: int = 15
     table_radius: float = 0.5
+    max_height: float = 0.08
 
 
 @dataclass
@@ -230,6 +234,8 @@ class RegionTracker:
         self.valid_count = 0
         self.frames_with_candidates = 0  # before identification: frames showing the colour
         self._stereo_points: deque[np.ndarray] = deque(maxlen=900)
+        self._valid_points: deque[np.ndarray] = deque(maxlen=600)  # the last 20 s at 30 Hz
+        self._last_seen: np.ndarray | None = None
         self._plane: Plane | None = None
         # the sponge's pixels in both cameras when it was identified (window images, 0/255
         # masks): what colour models are learnt from
@@ -253,12 +259,16 @@ class RegionTracker:
         self.history.clear()
         self.failures = self.params.coast_frames + 1
         self.candidates.tracks.clear()
+        self._last_seen = None  # the pass starts where the video starts, not where it ended
 
     def observe(self, point: np.ndarray) -> None:
         """Take this frame's sponge point (3,), left optical frame, from elsewhere (the box
         refinement) instead of measuring it: keeps the prediction going."""
         self.frame += 1
-        self.history.append((self.frame, np.asarray(point, dtype=np.float64).copy()))
+        point = np.asarray(point, dtype=np.float64).copy()
+        self.history.append((self.frame, point))
+        self._last_seen = point
+        self._valid_points.append(point)
         self.failures = 0
 
     def step(self, left: np.ndarray, right: np.ndarray) -> RegionEstimate:
@@ -335,9 +345,15 @@ class RegionTracker:
         self.candidates.static.pop(track.ident, None)  # it may have rested before it moved
         if len(self._recent[0]) < self.params.acquisition.window // 2:
             return False  # too few frames yet to tell still from moving
-        for background, recent in zip(self.backgrounds, self._recent):
+        path = track.recent(self.frame, self.params.acquisition.window)
+        sponge_size = float(np.percentile(list(track.sizes)[-len(path):], 10))
+        for view, background, recent in zip(self.views, self.backgrounds, self._recent):
             background.initialise(np.stack([image for _, image, _ in recent]),
                                   np.stack([positive for _, _, positive in recent]))
+            # a sponge wiping a path smaller than itself is not a still thing of its colour
+            pixels = np.array([view.pixel(point) for point in path])
+            depth = float(np.median([view.depth(point) for point in path]))
+            background.release(pixels, (1.5 * sponge_size * view.focal / depth) ** 2)
         # follow the candidates of the last frames again, without what stayed still
         cleaned = CandidateTracks(self.params.acquisition)
         for (frame, left, _), (_, right, _) in zip(*self._recent):
@@ -347,6 +363,9 @@ class RegionTracker:
                 max(track.size, 0.05):
             self.candidates.static[track.ident] = (track.last_point.copy(), track.size)
             self.candidates.tracks = [t for t in self.candidates.tracks if t is not track]
+            return False
+        if self._above_the_table(frames, moving):
+            self.candidates.rejected.add(track.ident)
             return False
         for recent in self._recent:
             recent.clear()
@@ -373,22 +392,52 @@ class RegionTracker:
         self.history.append((self.frame - 1, point.copy()))
         self.seed_windows, self.seed_masks = windows, masks
         self._table_centre = point.copy()
-        self._measure_table(frames)
+        self._measure_table(None if self._table_points else frames)
         return True
 
+    def _above_the_table(self, frames, track: CandidateTrack) -> bool:
+        """Whether a moving candidate keeps above the table (by dense stereo around it): a
+        wiping sponge lies on the table, a hand or a sleeve of its colour does not. False
+        when the table cannot be measured (a plain, untextured one)."""
+        point = track.last_point
+        if not self._table_points:
+            self._table_points.append(self.table_stereo.table_points(*frames, point))
+        table = self.table_stereo.plane_of_points(np.concatenate(self._table_points), point,
+                                                  self.params.table_radius,
+                                                  prior_normal=self.world_up)
+        if table is None:
+            return False
+        height = float(np.median(table.distance(track.recent(self.frame, 15))))
+        return height > self.params.max_height
+
     def _reacquire(self, frames) -> StereoCandidate | None:
-        """After a loss: a candidate of the sponge's size that is not a static object and
-        lies near where the sponge was."""
+        """After a loss: a candidate of the sponge's size that is not a still thing, lies
+        where the sponge has been wiping (within the area of its valid points, grown by
+        their spread) and, of those, nearest where it was last seen."""
         candidates = self._search_candidates(frames, self.model)
         self.candidates.update(self.frame, candidates)
+        home, reach = self._wiping_area()
         plausible = [c for c in candidates
                      if 0.5 < c.size / self.size < 2.0
-                     and not self.candidates.is_static(c.point, c.size)]
+                     and not self.candidates.is_static(c.point, c.size)
+                     and (home is None or np.linalg.norm(c.point - home) < reach)]
         if not plausible:
             return None
-        if self.last_valid is not None:
-            plausible.sort(key=lambda c: np.linalg.norm(c.point - self.last_valid))
+        last = self._last_seen if self._last_seen is not None else home
+        if last is not None:
+            plausible.sort(key=lambda c: np.linalg.norm(c.point - last))
         return plausible[0]
+
+    def _wiping_area(self) -> tuple[np.ndarray | None, float]:
+        """Centre (3,) of where the sponge has been (median of its recent valid points) and
+        how far from it the sponge may show again: the points' farthest distance plus the
+        sponge's size and a margin (None before any valid point)."""
+        if not self._valid_points:
+            return None, 0.0
+        points = np.array(self._valid_points)
+        centre = np.median(points, axis=0)
+        spread = float(np.percentile(np.linalg.norm(points - centre, axis=1), 98))
+        return centre, spread + self.size + 0.05
 
     # -------------------------------------------------------------- measuring
     def _window(self, view: _View, frame: np.ndarray, point: np.ndarray, radius: float,
@@ -525,9 +574,12 @@ class RegionTracker:
         direction = ends[1] - ends[0]
         return direction / np.linalg.norm(direction)
 
-    def _measure_table(self, frames) -> None:
-        """Add a frame pair's dense stereo points of the table and fit the table again."""
-        self._table_points.append(self.table_stereo.table_points(*frames, self._table_centre))
+    def _measure_table(self, frames=None) -> None:
+        """Add a frame pair's dense stereo points of the table (if given) and fit the table
+        again."""
+        if frames is not None:
+            self._table_points.append(self.table_stereo.table_points(*frames,
+                                                                     self._table_centre))
         table = self.table_stereo.plane_of_points(np.concatenate(self._table_points),
                                                   self._table_centre, self.params.table_radius,
                                                   prior_normal=self.world_up)
@@ -624,6 +676,8 @@ class RegionTracker:
 
     def _accept(self, frames, point, rays, areas, stereo, good) -> None:
         self.history.append((self.frame, point.copy()))
+        self._last_seen = point.copy()
+        self._valid_points.append(point.copy())
         # a "still thing" where the sponge is now was the sponge resting before it moved
         for ident, (centre, _) in list(self.candidates.static.items()):
             if np.linalg.norm(centre - point) < 0.5 * self.size:
