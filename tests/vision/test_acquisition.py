@@ -60,7 +60,10 @@ def test_a_blob_pair_that_breaks_the_epipolar_geometry_is_no_candidate():
 
 def _candidate(point, size):
     b = Blob(np.zeros(2), 1.0, (0, 0, 1, 1), np.zeros((1, 1, 2), np.int32), 1)
-    return StereoCandidate(np.asarray(point, float), size, (b, b), 0.0)
+    point = np.asarray(point, float)
+    right = point + T
+    return StereoCandidate(point, size, (b, b), 0.0, np.stack([point / point[2],
+                                                               right / right[2]]))
 
 
 def test_the_moving_object_is_picked_and_the_still_one_remembered_as_static():
@@ -76,6 +79,16 @@ def test_the_moving_object_is_picked_and_the_still_one_remembered_as_static():
     assert moving is not None and abs(moving.size - 0.09) < 1e-9
     assert tracks.is_static(cloth + 0.01, 0.28)
     assert not tracks.is_static(np.array([0.1, 0.1, 0.8]), 0.09)
+
+
+def test_two_still_things_paired_now_one_way_now_the_other_do_not_move():
+    # one blob in the left image paired now with one right blob, now with another: the 3D
+    # point jumps along the left camera's ray, which itself does not move
+    tracks = CandidateTracks()
+    ray = np.array([0.05, 0.1, 1.0])
+    for frame in range(60):
+        tracks.update(frame, [_candidate(ray * (0.8 if frame % 2 else 0.9), 0.09)])
+    assert len(tracks.tracks) == 1 and tracks.moving(59) is None
 
 
 def test_a_resting_sponge_is_static_until_it_moves():

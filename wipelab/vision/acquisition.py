@@ -45,12 +45,15 @@ class StereoCandidate:
         The left and right blob (in the pixels of the images they were found in).
     epipolar_error : float
         Larger reprojection error of the triangulated centre, full-resolution pixels.
+    rays : ndarray, shape (2, 3)
+        The blobs' viewing rays (x, y, 1) in the left and right camera.
     """
 
     point: np.ndarray
     size: float
     blobs: tuple[Blob, Blob]
     epipolar_error: float
+    rays: np.ndarray = field(default_factory=lambda: np.full((2, 3), np.nan))
 
 
 def triangulate_rays(ray_left: np.ndarray, ray_right: np.ndarray, R: np.ndarray,
@@ -150,7 +153,8 @@ def stereo_candidates(blobs_left: list[Blob], blobs_right: list[Blob],
         if max(size_left, size_right) > 2.0 * min(size_left, size_right):
             continue
         candidates.append(StereoCandidate(points[k], 0.5 * (size_left + size_right),
-                                          (left, right), float(error[k])))
+                                          (left, right), float(error[k]),
+                                          np.stack([rays_left[i], rays_right[j]])))
     # each blob in one pair at most, the best agreeing pairs first
     used_left, used_right, chosen = set(), set(), []
     for candidate in candidates:
@@ -178,6 +182,8 @@ class CandidateTrack:
     points : deque of ndarray
         Its 3D centre in those frames.
     sizes : deque of float
+    rays : deque of ndarray
+        Its viewing rays (2, 3) in the two cameras.
     first_frame : int
     ident : int
         A number no other track of the process has.
@@ -186,6 +192,7 @@ class CandidateTrack:
     frames: deque = field(default_factory=lambda: deque(maxlen=300))
     points: deque = field(default_factory=lambda: deque(maxlen=300))
     sizes: deque = field(default_factory=lambda: deque(maxlen=300))
+    rays: deque = field(default_factory=lambda: deque(maxlen=300))
     first_frame: int = 0
     ident: int = field(default_factory=itertools.count().__next__)
 
@@ -193,6 +200,7 @@ class CandidateTrack:
         self.frames.append(frame)
         self.points.append(np.asarray(candidate.point, dtype=np.float64))
         self.sizes.append(candidate.size)
+        self.rays.append(np.asarray(candidate.rays, dtype=np.float64))
 
     @property
     def last_point(self) -> np.ndarray:
@@ -208,13 +216,21 @@ class CandidateTrack:
         return np.array([p for f, p in zip(self.frames, self.points) if frame - f < window])
 
     def travel(self, frame: int, window: int) -> float:
-        """How far it moved in the last ``window`` frames: the 90th percentile of its
-        points' distances from their median, metres (0 with fewer than five points)."""
-        points = self.recent(frame, window)
-        if len(points) < 5:
+        """How far it moved in the last ``window`` frames, metres: in each camera, the 90th
+        percentile of its viewing rays' distances from their median, at its distance; the
+        smaller of the two (0 with fewer than five points). Measured in the images, not
+        in 3D: two things of the same colour paired now one way, now the other, jump in
+        depth but not in either image."""
+        recent = [(p, r) for f, p, r in zip(self.frames, self.points, self.rays)
+                  if frame - f < window]
+        if len(recent) < 5:
             return 0.0
-        return float(np.percentile(np.linalg.norm(points - np.median(points, axis=0), axis=1),
-                                   90))
+        points = np.array([p for p, _ in recent])
+        rays = np.array([r for _, r in recent])[:, :, :2]
+        depth = float(np.median(points[:, 2]))
+        per_camera = [np.percentile(np.linalg.norm(rays[:, k] - np.median(rays[:, k], axis=0),
+                                                   axis=1), 90) for k in range(2)]
+        return float(min(per_camera)) * depth
 
 
 @dataclass(frozen=True)
@@ -260,6 +276,9 @@ class CandidateTracks:
         #: static objects: (centre (3,), size) per track that stayed still; a track that
         #: moves later (a sponge resting before the demonstration) is taken out again
         self.static: dict[int, tuple[np.ndarray, float]] = {}
+        #: tracks found not to be the sponge although they move (a hand of a near colour
+        #: above the table): never picked again
+        self.rejected: set[int] = set()
 
     def update(self, frame: int, candidates: list[StereoCandidate]) -> None:
         """Add one frame's candidates: each continues the nearest track within the gate or
@@ -312,6 +331,8 @@ class CandidateTracks:
         p = self.params
         best, best_travel = None, p.min_travel
         for track in self.tracks:
+            if track.ident in self.rejected:
+                continue
             seen = sum(1 for f in track.frames if frame - f < p.window)
             if seen < p.min_presence:
                 continue

@@ -69,7 +69,10 @@ class RegionTrackerParams:
         median.
     max_ray_disagreement : float
         Largest change, in multiples of the sponge size, of the offset between the two
-        cameras' rays on the plane from its running median.
+        cameras' rays on the plane from its running median; once 30 frames are known, up to
+        1.5 times the 98th percentile of the changes seen (views far apart see the sponge's
+        faces differently as it moves), at most ``ray_disagreement_ceiling``.
+    ray_disagreement_ceiling : float
     coast_frames : int
         Frames the window keeps following the prediction after a failed measurement before
         the search covers the whole image again.
@@ -84,6 +87,9 @@ class RegionTrackerParams:
     table_every : int
     table_radius : float
         The table is measured within this distance of the sponge, metres.
+    max_height : float
+        A moving thing of the sponge's colour whose centre keeps higher than this above the
+        table is not the sponge (a hand or sleeve of a near colour), metres.
     """
 
     search_width: int = 320
@@ -95,6 +101,7 @@ class RegionTrackerParams:
     area_floor: float = 0.5
     area_ceiling: float = 2.0
     max_ray_disagreement: float = 0.12
+    ray_disagreement_ceiling: float = 0.4
     coast_frames: int = 6
     acquisition: AcquisitionParams = AcquisitionParams()
     colour_refresh: int = 60
@@ -102,6 +109,7 @@ class RegionTrackerParams:
     table_pairs: int = 6
     table_every: int = 15
     table_radius: float = 0.5
+    max_height: float = 0.08
 
 
 @dataclass
@@ -218,12 +226,16 @@ class RegionTracker:
         self._table_points: list[np.ndarray] = []  # dense stereo points of the table pairs
         self._table_centre: np.ndarray | None = None
         self.ray_offsets: deque[np.ndarray] = deque(maxlen=90)
+        self.ray_changes: deque[float] = deque(maxlen=120)  # of accepted frames, / size
+        self._ray_change: float | None = None
         self.areas = [deque(maxlen=120), deque(maxlen=120)]  # metric areas of valid frames
         self.history: deque[tuple[int, np.ndarray]] = deque(maxlen=3)
         self.failures = 0
         self.valid_count = 0
         self.frames_with_candidates = 0  # before identification: frames showing the colour
         self._stereo_points: deque[np.ndarray] = deque(maxlen=900)
+        self._valid_points: deque[np.ndarray] = deque(maxlen=600)  # the last 20 s at 30 Hz
+        self._last_seen: np.ndarray | None = None
         self._plane: Plane | None = None
         # the sponge's pixels in both cameras when it was identified (window images, 0/255
         # masks): what colour models are learnt from
@@ -247,12 +259,16 @@ class RegionTracker:
         self.history.clear()
         self.failures = self.params.coast_frames + 1
         self.candidates.tracks.clear()
+        self._last_seen = None  # the pass starts where the video starts, not where it ended
 
     def observe(self, point: np.ndarray) -> None:
         """Take this frame's sponge point (3,), left optical frame, from elsewhere (the box
         refinement) instead of measuring it: keeps the prediction going."""
         self.frame += 1
-        self.history.append((self.frame, np.asarray(point, dtype=np.float64).copy()))
+        point = np.asarray(point, dtype=np.float64).copy()
+        self.history.append((self.frame, point))
+        self._last_seen = point
+        self._valid_points.append(point)
         self.failures = 0
 
     def step(self, left: np.ndarray, right: np.ndarray) -> RegionEstimate:
@@ -329,9 +345,15 @@ class RegionTracker:
         self.candidates.static.pop(track.ident, None)  # it may have rested before it moved
         if len(self._recent[0]) < self.params.acquisition.window // 2:
             return False  # too few frames yet to tell still from moving
-        for background, recent in zip(self.backgrounds, self._recent):
+        path = track.recent(self.frame, self.params.acquisition.window)
+        sponge_size = float(np.percentile(list(track.sizes)[-len(path):], 10))
+        for view, background, recent in zip(self.views, self.backgrounds, self._recent):
             background.initialise(np.stack([image for _, image, _ in recent]),
                                   np.stack([positive for _, _, positive in recent]))
+            # a sponge wiping a path smaller than itself is not a still thing of its colour
+            pixels = np.array([view.pixel(point) for point in path])
+            depth = float(np.median([view.depth(point) for point in path]))
+            background.release(pixels, (1.5 * sponge_size * view.focal / depth) ** 2)
         # follow the candidates of the last frames again, without what stayed still
         cleaned = CandidateTracks(self.params.acquisition)
         for (frame, left, _), (_, right, _) in zip(*self._recent):
@@ -341,6 +363,9 @@ class RegionTracker:
                 max(track.size, 0.05):
             self.candidates.static[track.ident] = (track.last_point.copy(), track.size)
             self.candidates.tracks = [t for t in self.candidates.tracks if t is not track]
+            return False
+        if self._above_the_table(frames, moving):
+            self.candidates.rejected.add(track.ident)
             return False
         for recent in self._recent:
             recent.clear()
@@ -357,7 +382,9 @@ class RegionTracker:
             blobs = [b for b in find_blobs(probability, min_area=4)
                      if np.linalg.norm(b.centroid - centre) < reach + b.radius]
             mask = np.zeros(window.shape[:2], np.uint8)
-            mask[blob_mask(probability, blobs, grow=0)] = 255
+            # the sponge's colour is learnt from the pixels well inside the named colour only:
+            # the soft edge of the prior may take in a hand of a near hue
+            mask[blob_mask(probability, blobs, grow=0) & (probability > 0.99)] = 255
             masks.append(mask)
             windows.append(window)
         self.model = ColourModel.fit(windows, masks) if all(m.any() for m in masks) \
@@ -365,22 +392,52 @@ class RegionTracker:
         self.history.append((self.frame - 1, point.copy()))
         self.seed_windows, self.seed_masks = windows, masks
         self._table_centre = point.copy()
-        self._measure_table(frames)
+        self._measure_table(None if self._table_points else frames)
         return True
 
+    def _above_the_table(self, frames, track: CandidateTrack) -> bool:
+        """Whether a moving candidate keeps above the table (by dense stereo around it): a
+        wiping sponge lies on the table, a hand or a sleeve of its colour does not. False
+        when the table cannot be measured (a plain, untextured one)."""
+        point = track.last_point
+        if not self._table_points:
+            self._table_points.append(self.table_stereo.table_points(*frames, point))
+        table = self.table_stereo.plane_of_points(np.concatenate(self._table_points), point,
+                                                  self.params.table_radius,
+                                                  prior_normal=self.world_up)
+        if table is None:
+            return False
+        height = float(np.median(table.distance(track.recent(self.frame, 15))))
+        return height > self.params.max_height
+
     def _reacquire(self, frames) -> StereoCandidate | None:
-        """After a loss: a candidate of the sponge's size that is not a static object and
-        lies near where the sponge was."""
+        """After a loss: a candidate of the sponge's size that is not a still thing, lies
+        where the sponge has been wiping (within the area of its valid points, grown by
+        their spread) and, of those, nearest where it was last seen."""
         candidates = self._search_candidates(frames, self.model)
         self.candidates.update(self.frame, candidates)
+        home, reach = self._wiping_area()
         plausible = [c for c in candidates
                      if 0.5 < c.size / self.size < 2.0
-                     and not self.candidates.is_static(c.point, c.size)]
+                     and not self.candidates.is_static(c.point, c.size)
+                     and (home is None or np.linalg.norm(c.point - home) < reach)]
         if not plausible:
             return None
-        if self.last_valid is not None:
-            plausible.sort(key=lambda c: np.linalg.norm(c.point - self.last_valid))
+        last = self._last_seen if self._last_seen is not None else home
+        if last is not None:
+            plausible.sort(key=lambda c: np.linalg.norm(c.point - last))
         return plausible[0]
+
+    def _wiping_area(self) -> tuple[np.ndarray | None, float]:
+        """Centre (3,) of where the sponge has been (median of its recent valid points) and
+        how far from it the sponge may show again: the points' farthest distance plus the
+        sponge's size and a margin (None before any valid point)."""
+        if not self._valid_points:
+            return None, 0.0
+        points = np.array(self._valid_points)
+        centre = np.median(points, axis=0)
+        spread = float(np.percentile(np.linalg.norm(points - centre, axis=1), 98))
+        return centre, spread + self.size + 0.05
 
     # -------------------------------------------------------------- measuring
     def _window(self, view: _View, frame: np.ndarray, point: np.ndarray, radius: float,
@@ -468,6 +525,7 @@ class RegionTracker:
             problems[k] = "at the edge of the image" if truncated else ""
         metric_areas = np.array([area * (view.depth(predicted) / view.focal) ** 2
                                  for area, view in zip(areas, self.views)])
+        self._learn_area_range(problems, rays, metric_areas)
         for k in range(2):
             if not problems[k] and len(self.areas[k]) >= 5:
                 low, median, high = np.percentile(self.areas[k], [2, 50, 98])
@@ -489,11 +547,11 @@ class RegionTracker:
             reason = self._disagreement(rays)
             if not reason:
                 point = self._locate(rays, stereo)
-        elif len(good) == 1:
+        elif len(good) == 1 and self._mono_allowed(good[0], metric_areas[good[0]]):
             point = self._locate_mono(good[0], rays[good[0]])
             quality = QUALITY_MONO
             if point is not None and \
-                    np.linalg.norm(point - predicted) > 0.5 * self.size + slack:
+                    np.linalg.norm(point - predicted) > 0.3 * self.size + slack:
                 point, reason = None, reason + "; the one camera's region jumped"
         if point is None:
             return self._fail(rays, areas, stereo, reason or "no plane yet for one camera")
@@ -516,9 +574,12 @@ class RegionTracker:
         direction = ends[1] - ends[0]
         return direction / np.linalg.norm(direction)
 
-    def _measure_table(self, frames) -> None:
-        """Add a frame pair's dense stereo points of the table and fit the table again."""
-        self._table_points.append(self.table_stereo.table_points(*frames, self._table_centre))
+    def _measure_table(self, frames=None) -> None:
+        """Add a frame pair's dense stereo points of the table (if given) and fit the table
+        again."""
+        if frames is not None:
+            self._table_points.append(self.table_stereo.table_points(*frames,
+                                                                     self._table_centre))
         table = self.table_stereo.plane_of_points(np.concatenate(self._table_points),
                                                   self._table_centre, self.params.table_radius,
                                                   prior_normal=self.world_up)
@@ -552,6 +613,21 @@ class RegionTracker:
         cameras = [(view.R, view.t, view.focal) for view in self.views]
         return points_on_plane(plane, [rays[:1], rays[1:]], cameras)[0]
 
+    def _learn_area_range(self, problems, rays, metric_areas) -> None:
+        """Learn the range the region's area spans from every frame in which both cameras
+        show a whole region whose rays agree and whose area is within the floor and ceiling
+        of the median (the sponge turning, the holding hand moving on it), whether or not the
+        frame is then accepted; a hand passing in front is too rare to widen it much."""
+        p = self.params
+        if any(problems) or len(self.areas[0]) < 5 or self._disagreement(rays):
+            return
+        for k in range(2):
+            ratio = metric_areas[k] / np.median(self.areas[k])
+            if not p.area_floor <= ratio <= p.area_ceiling:
+                return
+        for k in range(2):
+            self.areas[k].append(metric_areas[k])
+
     def _disagreement(self, rays: np.ndarray) -> str:
         """Why the two cameras' regions cannot show the same sponge ("" if they can): where
         their rays meet the plane must differ as usual (a hand hiding part of the sponge in
@@ -559,11 +635,27 @@ class RegionTracker:
         plane = self.sponge_plane()
         if plane is None or len(self.ray_offsets) < 5:
             return ""
+        p = self.params
         typical = np.median(np.array(self.ray_offsets), axis=0)
-        if np.linalg.norm(self._ray_offset(plane, rays) - typical) > \
-                self.params.max_ray_disagreement * self.size:
+        change = np.linalg.norm(self._ray_offset(plane, rays) - typical) / self.size
+        limit = p.max_ray_disagreement
+        if len(self.ray_changes) >= 30:
+            limit = min(p.ray_disagreement_ceiling,
+                        max(limit, 1.5 * float(np.percentile(self.ray_changes, 98))))
+        if change > limit:
             return "the cameras' regions disagree"
+        self._ray_change = change
         return ""
+
+    def _mono_allowed(self, k: int, metric_area: float) -> bool:
+        """Whether camera k alone may stand for both: only to continue a track that was
+        valid on the previous frame, with a region of its usual area (a hand hiding the
+        sponge in one camera may show something of a near colour in the other)."""
+        p = self.params
+        if not self.history or self.history[-1][0] != self.frame - 1 or len(self.areas[k]) < 5:
+            return False
+        ratio = metric_area / np.median(self.areas[k])
+        return p.min_area_ratio <= ratio <= p.max_area_ratio
 
     def _locate_mono(self, k: int, ray: np.ndarray) -> np.ndarray | None:
         """The sponge point from camera k alone: where its ray meets the plane, moved by half
@@ -584,6 +676,8 @@ class RegionTracker:
 
     def _accept(self, frames, point, rays, areas, stereo, good) -> None:
         self.history.append((self.frame, point.copy()))
+        self._last_seen = point.copy()
+        self._valid_points.append(point.copy())
         # a "still thing" where the sponge is now was the sponge resting before it moved
         for ident, (centre, _) in list(self.candidates.static.items()):
             if np.linalg.norm(centre - point) < 0.5 * self.size:
@@ -591,7 +685,8 @@ class RegionTracker:
         self.failures = 0
         self.valid_count += 1
         for k in good:
-            self.areas[k].append(areas[k])
+            if len(self.areas[k]) < 5:  # the first ones; then _learn_area_range adds them
+                self.areas[k].append(areas[k])
         if self.valid_count % 30 == 0 and self.areas[0] and self.areas[1]:
             # the sponge's size as it is measured now (its first estimate came from a few
             # low-resolution frames)
@@ -605,6 +700,9 @@ class RegionTracker:
         plane = self.sponge_plane()
         if plane is not None and len(good) == 2:
             self.ray_offsets.append(self._ray_offset(plane, rays))
+            if self._ray_change is not None:
+                self.ray_changes.append(self._ray_change)
+        self._ray_change = None
 
     def _fail(self, rays, areas, stereo, reason: str) -> RegionEstimate:
         self.failures += 1

@@ -104,21 +104,16 @@ class StaticBackground:
         """
         small = self.canvas_image(frame)
         weight = self.rate * self.in_frame
-        under = np.zeros(weight.shape, bool)
         for mask, origin, step in keep_out:
             x0, y0, x1, y1 = self._bounds(origin, mask.shape, step)
             if x1 > x0 and y1 > y0:
                 inside = cv2.resize(mask.astype(np.uint8), (x1 - x0, y1 - y0),
                                     interpolation=cv2.INTER_AREA)
                 inside = cv2.dilate(inside, np.ones((3, 3), np.uint8))
-                under[y0:y1, x0:x1] |= inside > 0
-        weight[under] = 0.0
+                weight[y0:y1, x0:x1][inside > 0] = 0.0
         colour = (model.back_project(small) > 0.5).astype(np.float32)
         self.image += weight[..., None] * (small.astype(np.float32) - self.image)
         self.colour += weight * (colour - self.colour)
-        # what lies under the sponge is not seen: a still thing there (or a sponge that
-        # was mistaken for one before it was known) fades from the evidence
-        self.colour[under] *= 1.0 - self.rate
         self.seen += weight * (1.0 - self.seen)
         self.updates += 1
         self.still = ((self.seen > 0.3) & (self.colour > 0.5 * self.seen)).astype(np.uint8)
@@ -140,6 +135,21 @@ class StaticBackground:
         x1 = min(int(np.ceil((origin[0] + width * step) * self.scale)), self.size[0])
         y1 = min(int(np.ceil((origin[1] + height * step) * self.scale)), self.size[1])
         return x0, y0, x1, y1
+
+    def release(self, canvas_points: np.ndarray, max_area: float) -> None:
+        """Forget the still things that hold one of ``canvas_points`` (n, 2; canvas pixels)
+        and cover at most ``max_area`` canvas pixels: a sponge wiping a path smaller than
+        itself keeps its middle covered and looks still there."""
+        count, labels, stats, _ = cv2.connectedComponentsWithStats(self.still, connectivity=8)
+        if count <= 1:
+            return
+        pixels = np.round((np.asarray(canvas_points) + 0.5) * self.scale - 0.5).astype(int)
+        inside = (pixels[:, 0] >= 0) & (pixels[:, 1] >= 0) & (pixels[:, 0] < self.size[0]) \
+            & (pixels[:, 1] < self.size[1])
+        for label in set(labels[pixels[inside, 1], pixels[inside, 0]].tolist()) - {0}:
+            if stats[label, cv2.CC_STAT_AREA] <= max_area * self.scale ** 2:
+                self.colour[labels == label] = 0.0
+        self.still = ((self.seen > 0.3) & (self.colour > 0.5 * self.seen)).astype(np.uint8)
 
     def still_in_canvas_image(self, image: np.ndarray) -> np.ndarray | None:
         """Where a :meth:`canvas_image` shows a still thing of the sponge's colour as it
