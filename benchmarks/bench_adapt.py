@@ -115,9 +115,8 @@ def loop_speed(model_path: Path, seconds: float = 20.0) -> tuple[float, float]:
         period_end = 2.0 * np.pi
         begin, wall, cpu = session.time, time.perf_counter(), time.process_time()
         while session.time - begin < seconds:
-            xy, velocity, acceleration = path.step(omega, session.dt)
-            session.tick(xy, task.start_height, True, path.phase, velocity=np.append(velocity, 0),
-                         acceleration=np.append(acceleration, 0))
+            xy, velocity = path.step(omega, session.dt)
+            session.tick(xy, task.start_height, True, path.phase, velocity=np.append(velocity, 0))
             learner.update(session.trace.last("tcp_cmd")[2], path.phase, omega)
             if path.phase >= period_end:
                 period_end += 2.0 * np.pi

@@ -90,9 +90,9 @@ class PathGenerator:
     The output is the periodic DMP's steady state (its limit cycle, eqs. 6-7 solved in closed
     form by :func:`wipelab.learning.limit_cycle.limit_cycle`): started on it, integrating
     eqs. 6-7 gives exactly this, and the limit cycle does not depend on Omega, so a
-    frequency change only changes how fast the phase runs. The limit cycle and its first and
-    second phase derivatives are tabulated once, in one table, on :data:`TABLE_PHASES` phases
-    per period and interpolated linearly (as the limit cycle's own basis is; error below a
+    frequency change only changes how fast the phase runs. The limit cycle and its phase
+    derivative are tabulated once, in one table, on :data:`TABLE_PHASES` phases per period
+    and interpolated linearly (as the limit cycle's own basis is; error below a
     micrometre): one lookup per control period.
 
     Parameters
@@ -108,12 +108,12 @@ class PathGenerator:
         self.model, self.dofs = model, tuple(dofs)
         self.phase = float(phase)
         grid = np.linspace(0.0, 2.0 * math.pi, TABLE_PHASES + 1)
-        # rows: phase; then position, first and second phase derivative, each (d,)
+        # rows: phase; then position and its phase derivative, each (d,)
         self._table = np.stack([dof_waveform(model, self.dofs, grid, derivative=k)
-                                for k in range(3)], axis=1)
+                                for k in range(2)], axis=1)
 
     def _lookup(self) -> np.ndarray:
-        """Position and phase derivatives (3, d) at the current phase."""
+        """Position and phase derivative (2, d) at the current phase."""
         where = (self.phase % (2.0 * math.pi)) * (TABLE_PHASES / (2.0 * math.pi))
         index = min(int(where), TABLE_PHASES - 1)
         fraction = where - index
@@ -128,10 +128,9 @@ class PathGenerator:
         """Largest speed (m/s) of the output at Omega (rad/s)."""
         return float(np.max(np.linalg.norm(self._table[:, 1], axis=1))) * omega
 
-    def step(self, omega: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Advance the phase by omega dt (rad/s, s); returns the position (d,) (m), velocity
-        (d,) (m/s) and acceleration (d,) (m/s^2) there (the feed-forward of the joint servos
-        and of the inertia compensation)."""
+    def step(self, omega: float, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """Advance the phase by omega dt (rad/s, s); returns the position (d,) (m) and
+        velocity (d,) (m/s) there (the joint servos' feed-forward)."""
         self.phase += omega * dt
-        position, velocity, acceleration = self._lookup()
-        return position, velocity * omega, acceleration * (omega * omega)
+        position, velocity = self._lookup()
+        return position, velocity * omega

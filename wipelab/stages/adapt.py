@@ -138,13 +138,11 @@ def _learn(task: WipingTask, model: PeriodicModel, params: AdaptParams, quiet: b
         try:
             period_end = 2.0 * math.pi
             while monitor.periods_ < params.periods and not monitor.converged:
-                xy, velocity, acceleration = path.step(omega, dt)
+                xy, velocity = path.step(omega, dt)
                 z = ((task.start_height, 0.0, 0.0) if reference is None else
                      [value[0] for value in reference.step(omega, dt)])
                 session.tick(xy, z[0], True, path.phase,
-                             velocity=np.array([velocity[0], velocity[1], z[1]]),
-                             acceleration=np.array([acceleration[0], acceleration[1], z[2]]),
-                             mode=LEARN)
+                             velocity=np.array([velocity[0], velocity[1], z[1]]), mode=LEARN)
                 learner.update(session.trace.last("tcp_cmd")[2], path.phase, omega)
                 bar.update()
                 if path.phase >= period_end:
@@ -168,9 +166,9 @@ def _learn(task: WipingTask, model: PeriodicModel, params: AdaptParams, quiet: b
             session.integrator.offset_ = z_now - replay.position[2]
             hold_end = path.phase + 2.0 * math.pi * params.hold_periods
             while replay.phase < hold_end:
-                position, velocity, acceleration = replay.step(omega, dt)
+                position, velocity = replay.step(omega, dt)
                 session.tick(position[:2], position[2], True, replay.phase, velocity=velocity,
-                             acceleration=acceleration, mode=HOLD)
+                             mode=HOLD)
                 bar.update()
         except SafetyStop as stop:
             run.stop_reason = str(stop)

@@ -132,13 +132,11 @@ def _run_one(task: WipingTask, path: PathGenerator, omega: float, mode: str, lab
         motion_start = session.time
         score_from = motion_start + params.warmup_periods * period
         while path.phase < end_phase:
-            position, velocity, acceleration = path.step(omega, dt)
+            position, velocity = path.step(omega, dt)
             z_ref = position[2] if learned else reference
-            vz, az = (velocity[2], acceleration[2]) if learned else (0.0, 0.0)   # z_r moves?
+            vz = velocity[2] if learned else 0.0   # z_r moves?
             session.tick(position[:2], z_ref, compliance_on, path.phase,
-                         velocity=np.array([velocity[0], velocity[1], vz]),
-                         acceleration=np.array([acceleration[0], acceleration[1], az]),
-                         mode=label)
+                         velocity=np.array([velocity[0], velocity[1], vz]), mode=label)
             bar.update()
     except SafetyStop as error:
         stop = str(error)
