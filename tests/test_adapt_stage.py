@@ -40,7 +40,7 @@ def test_adapt_on_flat_converges_and_learns_the_surface(adapted):
     assert metrics["force_hold"]["rms_force_error_n"] <= 1.5
     assert metrics["force_hold"]["contact_fraction"] >= 0.99
     model = PeriodicModel.from_dict(json.loads((out / "adapted_model.json").read_text()))
-    assert model.dofs == ("x", "y", "z") and model.surface["spec"] == "flat"
+    assert model.dofs == ("x", "y", "z", "z_per_hz") and model.surface["spec"] == "flat"
     # z learned on 50 kernels, the demonstrated x-y refitted onto them
     assert model.kernels == 50 and metrics["kernels"]["model"] == 25
     assert metrics["kernels"]["xy_refit_error_m"] < 1e-4

@@ -50,7 +50,10 @@ def _common(function):
 @click.option("--amplitude-scale", type=float, default=1.0, show_default=True,
               help="Scale of the x-y oscillation.")
 @click.option("--slowdown", type=float, default=4.0, show_default=True,
-              help="Omega is divided by this while learning.")
+              help="Omega is divided by this for online learning (the paper's stage).")
+@click.option("--tempos", default="1", show_default=True, metavar="S,S,...",
+              help="Refine the profile by iterative learning at these multiples of the "
+                   "demonstrated tempo (after the learning tempo), in increasing order.")
 @click.option("--hold-periods", type=int, default=1, show_default=True,
               help="Periods with the learned profile after learning.")
 @click.option("--tolerance", type=float, default=0.002, show_default=True,
@@ -64,7 +67,8 @@ def _common(function):
 def adapt(model: Path, out_dir: Path, surface: str | None, force: float | None,
           feedback: str | None, base: str, sponge_stiffness: float, seed: int, quiet: bool,
           periods: int, center: str | None, amplitude_scale: float, slowdown: float,
-          hold_periods: int, tolerance: float, kernels: int, reference: str) -> None:
+          tempos: str, hold_periods: int, tolerance: float, kernels: int,
+          reference: str) -> None:
     """Learn the force profile of a surface for MODEL (model.json) on the simulated robot.
 
     The x-y path is centred at --center, slowed down, and executed with active compliance in
@@ -77,7 +81,7 @@ def adapt(model: Path, out_dir: Path, surface: str | None, force: float | None,
     params = AdaptParams(
         surface=surface or "flat", center=comma_separated("--center", center, 2),
         amplitude_scale=amplitude_scale, slowdown=slowdown, periods=periods,
-        hold_periods=hold_periods, force=10.0 if force is None else force,
+        tempos=comma_separated("--tempos", tempos), hold_periods=hold_periods, force=10.0 if force is None else force,
         feedback=feedback or "norm", base=comma_separated("--base", base, 3),
         sponge_stiffness=sponge_stiffness, seed=seed, kernels=kernels,
         learning=ProfileLearningParams(tolerance=tolerance, reference=reference))
@@ -96,8 +100,9 @@ def adapt(model: Path, out_dir: Path, surface: str | None, force: float | None,
 @click.argument("more_scales", nargs=-1, type=float, metavar="")
 @_common
 @click.option("--frequency-scale", "scales", type=float, multiple=True,
-              help="Frequency scale(s) relative to the learning frequency: "
-                   "--frequency-scale 1 2 3 [default: 1 2 3].")
+              help="Tempo(s) as multiples of the demonstrated one (the model's frequency_hz; "
+                   "1 = as fast as the person wiped): --frequency-scale 0.25 1 1.5 "
+                   "[default: 1 1.5].")
 @click.option("--mode", "modes", multiple=True,
               type=click.Choice(["learned", "learned+compliance", "compliance", "planar"]),
               help="Run only these modes (repeatable) [default: all four].")
@@ -121,7 +126,7 @@ def replay(model: Path, more_scales: tuple[float, ...], out_dir: Path, surface: 
 
     if more_scales and not scales:
         raise click.UsageError(f"unexpected extra arguments {list(more_scales)}")
-    all_scales = tuple(scales) + tuple(more_scales) or (1.0, 2.0, 3.0)
+    all_scales = tuple(scales) + tuple(more_scales) or ReplayParams.frequency_scales
     params = ReplayParams(surface=surface, frequency_scales=all_scales,
                           modes=tuple(modes) or MODES, periods=periods,
                           warmup_periods=warmup_periods, force=force, feedback=feedback,
@@ -133,5 +138,9 @@ def replay(model: Path, more_scales: tuple[float, ...], out_dir: Path, surface: 
     for scale, runs in metrics["scales"].items():
         summary = ", ".join(f"{mode} {run.get('rms_force_error_n', float('nan')):.2f} N"
                             for mode, run in runs.items())
-        click.echo(f"replay {scale}x: RMS(|F|-F0) {summary}")
+        first = next(iter(runs.values()))
+        limited = (f" (the arm cannot follow {first['requested_frequency_hz']:.2f} Hz)"
+                   if first["arm_limited"] else "")
+        click.echo(f"replay {scale}x = {first['frequency_hz']:.2f} Hz{limited}: "
+                   f"RMS(|F|-F0) {summary}")
     click.echo(f"-> {out_dir}")

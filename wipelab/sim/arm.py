@@ -34,6 +34,9 @@ HIP_PITCHES = np.radians(-np.arange(0.0, 41.0, 5.0))
 LIMIT_MARGIN = np.radians(5.0)
 #: Largest position error (m) at a sample point for it to count as reached.
 REACH_TOLERANCE = 0.002
+#: Fraction of the IK's joint speed limit that a planned movement may use (the rest is for
+#: the force feedback's corrections).
+SPEED_FRACTION = 0.85
 
 
 @dataclass(frozen=True)
@@ -93,3 +96,20 @@ class RightArm:
     def tracker(self, posture: TaskPosture) -> ArmIK:
         """IK on the 7 arm joints with the torso held at ``posture.torso``."""
         return self._arm_ik(posture.torso, posture.arm)
+
+
+def phase_rate_limit(tracker: ArmIK, posture: TaskPosture, points, velocities,
+                     joint_speed_limit: float) -> float:
+    """Largest Omega (rad/s) at which the arm can follow a periodic path.
+
+    The path's ``points`` (k, 3) (m, world, in phase order) are solved one after the other
+    from the centre posture, and at each the joint velocities for the path's velocity per
+    unit phase ``velocities`` (k, 3) (m/rad) are those the tracker would command; the
+    fastest joint sets the limit: Omega_max = ``joint_speed_limit`` (rad/s) / max |dq/dphi|.
+    """
+    q, fastest = posture.arm.copy(), 0.0
+    for point, velocity in zip(np.asarray(points, dtype=float),
+                               np.asarray(velocities, dtype=float)):
+        q, _ = tracker.solve(q, point, max_iterations=100)
+        fastest = max(fastest, float(np.max(np.abs(tracker.joint_velocity(q, velocity)))))
+    return joint_speed_limit / fastest if fastest > 0 else float("inf")

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from functools import lru_cache
 
 import numpy as np
 
@@ -71,6 +72,78 @@ def with_kernels(model: PeriodicModel, n_kernels: int) -> PeriodicModel:
 def refit_error(original: PeriodicModel, refitted: PeriodicModel, dofs) -> float:
     """Largest difference (m) between two models' waveforms of ``dofs`` along the path."""
     return float(np.max(np.abs(dof_waveform(original, dofs) - dof_waveform(refitted, dofs))))
+
+
+#: Name of the DOF that holds how the learned height changes with the tempo (m per Hz).
+TEMPO_DOF = "z_per_hz"
+
+
+def with_height_profiles(model: PeriodicModel, profiles: dict[float, np.ndarray]
+                         ) -> PeriodicModel:
+    """The model with the learned height: DOF ``z`` at the model's (demonstrated) frequency
+    and, when profiles at more than one tempo are given, DOF :data:`TEMPO_DOF` (m/Hz).
+
+    Per phase, the heights learned at the tempos are fitted by a straight line in the
+    frequency (a lag, tau, shifts a feature of the profile by Omega tau: to first order a
+    change proportional to the frequency); ``z`` is the line at ``model.frequency_hz`` and
+    :data:`TEMPO_DOF` its slope. Both are fitted onto the model's kernels (amplitude 1: the
+    weights are in metres).
+
+    Parameters
+    ----------
+    profiles : dict
+        Frequency (Hz) -> heights (g,) (m, world z) at ``g`` phases evenly spaced from 0.
+    """
+    frequencies = np.array(sorted(profiles))
+    heights = np.array([profiles[f] for f in frequencies])           # (tempos, g)
+    if len(frequencies) > 1:
+        slope, intercept = np.polyfit(frequencies - model.frequency_hz, heights, 1)
+        waveforms = {"z": intercept, TEMPO_DOF: slope}
+    else:
+        waveforms = {"z": heights[0]}
+    projection = _waveform_fit(heights.shape[1], model.kernels, model.width, model.alpha_s,
+                               model.beta_s)
+    base = _without(model, ("z", TEMPO_DOF))
+    for name, waveform in waveforms.items():
+        goal = float(np.mean(waveform))
+        base = base.with_dof(name, projection @ (waveform - goal), goal, 1.0)
+    return base
+
+
+@lru_cache(maxsize=8)
+def _waveform_fit(samples: int, n_kernels: int, width: float, alpha_s: float, beta_s: float
+                  ) -> np.ndarray:
+    """The linear map (N, samples) from a waveform minus its goal, at ``samples`` phases
+    evenly spaced from 0, to the weights (amplitude 1) of
+    :func:`wipelab.learning.fit_weights` (each column: the fit of one unit sample)."""
+    phases = np.linspace(0.0, 2.0 * math.pi, samples, endpoint=False)
+    unit = fit_weights(phases, np.eye(samples), np.zeros(samples), np.ones(samples), n_kernels,
+                       width, alpha_s, beta_s, smoothing=REFIT_SMOOTHING)
+    unit.setflags(write=False)
+    return unit.T
+
+
+def at_frequency(model: PeriodicModel, frequency_hz: float) -> PeriodicModel:
+    """The model with ``z`` the height learned for ``frequency_hz`` (Hz): z + (frequency_hz -
+    model.frequency_hz) z_per_hz, exact since the limit cycle is linear in weights and goal;
+    without :data:`TEMPO_DOF`. A model without it is returned as it is."""
+    if TEMPO_DOF not in model.dofs:
+        return model
+    z, slope = model.dofs.index("z"), model.dofs.index(TEMPO_DOF)
+    if model.amplitude[z] != model.amplitude[slope]:
+        raise ValueError(f"z and {TEMPO_DOF} must share their amplitude")
+    delta = frequency_hz - model.frequency_hz
+    weights, goal = model.weights.copy(), model.goal.copy()
+    weights[z] += delta * weights[slope]
+    goal[z] += delta * goal[slope]
+    return _without(replace(model, weights=weights, goal=goal), (TEMPO_DOF,))
+
+
+def _without(model: PeriodicModel, dofs) -> PeriodicModel:
+    """The model without the named DOFs (those it has)."""
+    keep = [i for i, d in enumerate(model.dofs) if d not in dofs]
+    return replace(model, dofs=tuple(model.dofs[i] for i in keep), goal=model.goal[keep],
+                   amplitude=model.amplitude[keep], weights=model.weights[keep])
 
 
 def place_model(model: PeriodicModel, centre, amplitude_scale: float = 1.0) -> PeriodicModel:

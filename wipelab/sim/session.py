@@ -20,6 +20,8 @@ its commands with a lag.
 
 from __future__ import annotations
 
+from collections.abc import Generator, Iterator
+
 import numpy as np
 
 from wipelab.control.compliance import (ComplianceIntegrator, ComplianceParams, feedback_force,
@@ -79,6 +81,15 @@ class Trace:
         return len(self.rows)
 
 
+def _exhaust(steps: Generator):
+    """Run a generator of control periods to its end; returns its return value."""
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            return done.value
+
+
 class SafetyStop(Exception):
     """Raised by :meth:`WipingSession.tick` when |F| exceeded the safety limit; the session
     has already retracted the tool."""
@@ -119,10 +130,39 @@ class WipingSession:
     def time(self) -> float:
         return self.world.time
 
-    # -- start-up ---------------------------------------------------------------------------
-    def _hold(self, q_arm: np.ndarray, seconds: float) -> list[StepResult]:
+    # -- start-up (each as a generator of control periods, and as a call that runs it) ------
+    def _holding(self, q_arm: np.ndarray, seconds: float) -> Iterator[StepResult]:
         self.world.command(q_arm)
-        return [self.world.step() for _ in range(int(round(seconds / self.dt)))]
+        for _ in range(int(round(seconds / self.dt))):
+            self.last = self.world.step()
+            yield self.last
+
+    def calibrating(self) -> Generator[None, None, PayloadModel]:
+        """:meth:`calibrate`, one control period per iteration; returns the payload."""
+        readings, rotations = [], []
+        home = self.q_arm.copy()
+        for d1, d2 in CALIBRATION_OFFSETS:
+            q = home.copy()
+            q[5] = np.clip(q[5] + d1, self.tracker.lower[5], self.tracker.upper[5])
+            q[6] = np.clip(q[6] + d2, self.tracker.lower[6], self.tracker.upper[6])
+            for _ in self._holding(q, CALIBRATION_SETTLE):
+                yield
+            steps = []
+            for step in self._holding(q, CALIBRATION_SAMPLES * self.dt):
+                steps.append(step)
+                yield
+            readings.append(np.mean([s.wrench for s in steps], axis=0))
+            rotations.append(steps[-1].sensor_rotation)
+        for _ in self._holding(home, CALIBRATION_SETTLE):
+            yield
+        payload = identify_payload(np.array(readings), np.array(rotations))
+        if payload.residual > CALIBRATION_RESIDUAL:
+            raise RuntimeError(f"F/T calibration failed: the readings do not fit a free payload "
+                               f"(residual {payload.residual:.1f} N); was the tool touching "
+                               "something?")
+        self.payload = payload
+        self._payload_motion(self.last)
+        return payload
 
     def calibrate(self) -> PayloadModel:
         """Identify the payload (hand + sponge) and the sensor bias in free air.
@@ -131,28 +171,10 @@ class WipingSession:
         around the rest posture; in each pose the readings of :data:`CALIBRATION_SAMPLES`
         periods are averaged.
         """
-        readings, rotations = [], []
-        home = self.q_arm.copy()
-        for d1, d2 in CALIBRATION_OFFSETS:
-            q = home.copy()
-            q[5] = np.clip(q[5] + d1, self.tracker.lower[5], self.tracker.upper[5])
-            q[6] = np.clip(q[6] + d2, self.tracker.lower[6], self.tracker.upper[6])
-            self._hold(q, CALIBRATION_SETTLE)
-            steps = self._hold(q, CALIBRATION_SAMPLES * self.dt)
-            readings.append(np.mean([s.wrench for s in steps], axis=0))
-            rotations.append(steps[-1].sensor_rotation)
-        self._hold(home, CALIBRATION_SETTLE)
-        payload = identify_payload(np.array(readings), np.array(rotations))
-        if payload.residual > CALIBRATION_RESIDUAL:
-            raise RuntimeError(f"F/T calibration failed: the readings do not fit a free payload "
-                               f"(residual {payload.residual:.1f} N); was the tool touching "
-                               "something?")
-        self.payload = payload
-        return payload
+        return _exhaust(self.calibrating())
 
-    def move_to(self, position, seconds: float, mode: int = 0) -> None:
-        """Move the TCP in a straight line (smooth in time) to ``position`` (3,) in free air
-        (no compliance; the safety limit is watched once the payload is known)."""
+    def moving_to(self, position, seconds: float, mode: int = 0) -> Iterator[None]:
+        """:meth:`move_to`, one control period per iteration."""
         start = (self.world.tcp_pose()[0] if not len(self.trace)
                  else np.asarray(self.trace.last("tcp_cmd"), dtype=float))
         goal = np.asarray(position, dtype=float)
@@ -165,6 +187,12 @@ class WipingSession:
                 self.force = self.sense()
                 self._check_safety(mode)
             self._command_and_step(target, velocity, target[2], np.nan, mode)
+            yield
+
+    def move_to(self, position, seconds: float, mode: int = 0) -> None:
+        """Move the TCP in a straight line (smooth in time) to ``position`` (3,) in free air
+        (no compliance; the safety limit is watched once the payload is known)."""
+        _exhaust(self.moving_to(position, seconds, mode))
 
     # -- one control period -----------------------------------------------------------------
     def sense(self) -> np.ndarray:
@@ -181,8 +209,9 @@ class WipingSession:
         pose, jacobian = self.tracker.chain.jacobian(result.q)
         velocity = jacobian[:3] @ result.qd
         if self.payload is not None:
-            lever = pose[:3, :3] @ (self.payload.com - np.array([TCP_OFFSET, 0.0, 0.0]))
-            velocity = velocity + np.cross(jacobian[3:] @ result.qd, lever)
+            (lx, ly, lz) = pose[:3, :3] @ (self.payload.com - np.array([TCP_OFFSET, 0.0, 0.0]))
+            wx, wy, wz = jacobian[3:] @ result.qd
+            velocity += (wy * lz - wz * ly, wz * lx - wx * lz, wx * ly - wy * lx)  # w x lever
         self.acceleration = (velocity - self._payload_velocity) / self.dt
         self._payload_velocity = velocity
 

@@ -17,10 +17,10 @@ import numpy as np
 from wipelab.control.compliance import ComplianceParams
 from wipelab.errors import InputError
 from wipelab.learning import PeriodicModel
-from wipelab.sim.arm import RightArm, TaskPosture
+from wipelab.sim.arm import SPEED_FRACTION, RightArm, TaskPosture, phase_rate_limit
 from wipelab.sim.ft_sensor import FTSensorParams
 from wipelab.sim.ik import IKParams
-from wipelab.sim.path import dof_waveform
+from wipelab.sim.path import PATH_PHASES, dof_waveform
 from wipelab.sim.session import WipingSession
 from wipelab.sim.sponge import Grasp, SpongeParams, touch
 from wipelab.sim.surfaces import Surface
@@ -37,6 +37,8 @@ REACH_TOLERANCE = 0.005
 START_CLEARANCE = 0.03
 #: Height (m) above the start at which the F/T payload is identified.
 CALIBRATION_LIFT = 0.08
+#: Every how many of the path's PATH_PHASES its joint speeds are checked.
+SPEED_CHECK_STRIDE = 4
 
 
 @dataclass(frozen=True)
@@ -65,6 +67,12 @@ class WipingTask:
     session: WipingSession
     start_height: float                 # TCP z (m) of the start: sponge clear of the surface
     path_xy: np.ndarray = field(repr=False)   # (n, 2) x-y path at PATH_PHASES
+    max_frequency_hz: float = math.inf  # fastest tempo (Hz) at which the arm follows the path
+
+    def executable_frequency(self, frequency_hz: float) -> float:
+        """The tempo (Hz) the path is executed at when ``frequency_hz`` is asked for: at most
+        :attr:`max_frequency_hz` (the arm's joint speeds)."""
+        return min(frequency_hz, self.max_frequency_hz)
 
     def close(self) -> None:
         self.world.close()
@@ -131,6 +139,15 @@ def build_task(model: PeriodicModel, surface: Surface, options: TaskOptions,
                          f"{100 * posture.error:.1f} cm at its worst point with the torso "
                          f"leaning up to 40 deg); move it with --center or scale it down")
     tracker = arm.tracker(posture)
+    check = slice(0, None, SPEED_CHECK_STRIDE)
+    dofs = ("x", "y", "z") if "z" in model.dofs else ("x", "y")
+    points = np.column_stack([path_xy, nominal])[check]
+    velocities = np.zeros((len(points), 3))
+    velocities[:, :len(dofs)] = dof_waveform(model, dofs, PATH_PHASES[check], derivative=1)
+    if "z" in model.dofs:
+        points[:, 2] = dof_waveform(model, ("z",), PATH_PHASES[check])[:, 0]
+    joint_speed = SPEED_FRACTION * options.ik.max_step / options.sim.dt
+    max_omega = phase_rate_limit(tracker, posture, points, velocities, joint_speed)
     above = centre + np.array([0.0, 0.0, START_CLEARANCE + CALIBRATION_LIFT])
     start_arm, _ = tracker.solve(posture.arm, above)
     world = SimWorld(surface, posture.torso, start_arm, posture.tcp_rotation, options.base,
@@ -141,4 +158,5 @@ def build_task(model: PeriodicModel, surface: Surface, options: TaskOptions,
     session = WipingSession(world, tracker, posture.torso, options.compliance, options.sensor)
     session.q_arm = start_arm.copy()
     return WipingTask(surface, model, options, posture, world, session,
-                      float(heights.max() + START_CLEARANCE), path_xy)
+                      float(heights.max() + START_CLEARANCE), path_xy,
+                      max_omega / (2.0 * math.pi))
