@@ -125,9 +125,15 @@ def test_cli_bad_kernel_count(model_file, tmp_path):
                     "--kernels: must be in [5, 200]")
 
 
-def test_cli_unreachable_movement(model_file, tmp_path):
-    _one_error_line(_invoke("adapt", model_file, "-o", tmp_path / "o", "--center", "0.88,-0.58"),
-                    "the arm cannot reach the movement")
+def test_cli_refuses_a_surface_the_arm_cannot_reach_and_says_why(model_file, tmp_path):
+    (tmp_path / "high.toml").write_text('type = "flat"\nheight = 1.35\n')
+    _one_error_line(_invoke("adapt", model_file, "-o", tmp_path / "o", "--surface",
+                            tmp_path / "high.toml"),
+                    "the arm cannot reach the movement (20 x 20 cm) on the surface 'high' "
+                    "(1.35-1.35 m high; the arm wipes surfaces")
+    assert not (tmp_path / "o").exists()
+    _one_error_line(_invoke("adapt", model_file, "-o", tmp_path / "o", "--center", "0.95,-0.65"),
+                    "does not fit on the surface 'flat' there")
 
 
 def test_cli_replay_needs_an_adapted_model_for_the_learned_modes(model_file, tmp_path):

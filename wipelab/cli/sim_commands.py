@@ -25,8 +25,9 @@ def _common(function):
         click.option("--feedback", type=click.Choice(["fz", "norm"]), default=None,
                      help="Force feedback: F_z or |F| (lets the hand climb edges) "
                           "[adapt default: norm]."),
-        click.option("--base", default="0,0,0", show_default=True, metavar="X,Y,YAW",
-                     help="Robot platform pose in the world (m, m, rad)."),
+        click.option("--base", default=None, metavar="X,Y,YAW",
+                     help="Robot platform pose in the world (m, m, rad) [default: chosen with "
+                          "the path's place; replay: where the model was adapted]."),
         click.option("--sponge-stiffness", type=float, default=1000.0, show_default=True,
                      help="Sponge stiffness (N/m, 500-2000)."),
         click.option("--seed", type=int, default=0, show_default=True,
@@ -45,8 +46,8 @@ def _common(function):
 @click.option("--periods", type=int, default=8, show_default=True,
               help="Most learning periods (learning stops earlier when converged).")
 @click.option("--center", default=None, metavar="X,Y",
-              help="Where the centre of the path's bounding box goes (m, world) "
-                   "[default: the surface's wiping centre, 0.58,-0.28 for the built-ins].")
+              help="Where the centre of the path's bounding box goes (m, world) [default: "
+                   "chosen on the surface, as near its wiping centre as the robot does well].")
 @click.option("--amplitude-scale", type=float, default=1.0, show_default=True,
               help="Scale of the x-y oscillation.")
 @click.option("--slowdown", type=float, default=4.0, show_default=True,
@@ -65,8 +66,8 @@ def _common(function):
               help="Y_r while learning: the profile learned so far, or the start height "
                    "(the paper's).")
 def adapt(model: Path, out_dir: Path, surface: str | None, force: float | None,
-          feedback: str | None, base: str, sponge_stiffness: float, seed: int, quiet: bool,
-          periods: int, center: str | None, amplitude_scale: float, slowdown: float,
+          feedback: str | None, base: str | None, sponge_stiffness: float, seed: int,
+          quiet: bool, periods: int, center: str | None, amplitude_scale: float, slowdown: float,
           tempos: str, hold_periods: int, tolerance: float, kernels: int,
           reference: str) -> None:
     """Learn the force profile of a surface for MODEL (model.json) on the simulated robot.

@@ -28,6 +28,8 @@ message costs ~20 us to write, as much as a tenth of a simulated control period.
   ``/adapt/profile`` (JSON: period, waveform) - how the profile converges.
 - ``/scene/surface``: the surface's grid points; Rerun also gets the robot model from the URDF
   (``/armar3b``), the sponge box and the surface as a mesh.
+- ``/<stage>/placement`` (JSON), ``/scene/platform_footprint``, ``/scene/path_center``: where
+  the path went and how the platform stood (:func:`log_placement`).
 """
 
 from __future__ import annotations
@@ -42,7 +44,7 @@ from rerun.urdf import UrdfTree
 from wipelab.control.force_profile import COMPARISON_PHASES
 from wipelab.learning import PeriodicModel
 from wipelab.logs import StageRecorder
-from wipelab.sim.armar3 import RIGHT_ARM_JOINTS, TORSO_JOINTS, armar3b_urdf_path
+from wipelab.sim.armar3 import PLATFORM_SIZE, RIGHT_ARM_JOINTS, TORSO_JOINTS, armar3b_urdf_path
 from wipelab.sim.kinematics import (parse_urdf_joints, quaternion_xyzw_from_rotation,
                                     quaternions_xyzw_from_rotations)
 from wipelab.sim.path import PATH_PHASES, dof_waveform
@@ -210,3 +212,22 @@ def log_run(rec: StageRecorder, stage: str, task, trace: dict, segments, profile
     _log_poses(rec, stage, task, trace)
     if profiles:
         _log_profiles(rec, model, profiles)
+
+
+def log_placement(rec: StageRecorder, stage: str, t: float, placement: dict) -> None:
+    """The placement the stage ran with (:func:`~wipelab.sim.task.place_task`'s record):
+    ``/<stage>/placement`` (JSON) and, in the 3D view, ``/scene/platform_footprint`` (the
+    platform's outline on the floor) and ``/scene/path_center`` (where the path's centre
+    went, on the floor under it)."""
+    rec.json(f"/{stage}/placement", t, placement, "wipelab.Placement")
+    x, y, yaw = placement["base"]
+    half = PLATFORM_SIZE[0] / 2
+    corners = np.array([[-half, -half], [half, -half], [half, half], [-half, half],
+                        [-half, -half]])
+    c, s = np.cos(yaw), np.sin(yaw)
+    outline = corners @ np.array([[c, s], [-s, c]]) + [x, y]
+    rec.line_strip3d("/scene/platform_footprint", t,
+                     np.column_stack([outline, np.full(len(outline), 0.002)]),
+                     color=(90, 200, 255), thickness=0.01)
+    rec.points3d("/scene/path_center", t, [[*placement["center"], 0.002]],
+                 colors=(90, 200, 255), radii=0.02)

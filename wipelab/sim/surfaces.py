@@ -73,6 +73,8 @@ class Surface:
         The OBJ file of a ``mesh`` surface (its collision geometry).
     tilt : tuple of float
         (about x, about y) in rad for ``flat`` (its collision box is rotated by them).
+    footprint : ndarray (nx, ny) of bool, or None
+        Where the grid has a surface (a mesh may not cover its bounding box); None: all of it.
     """
 
     name: str
@@ -85,6 +87,12 @@ class Surface:
     parameters: dict = field(default_factory=dict)
     mesh_file: Path | None = None
     tilt: tuple[float, float] = (0.0, 0.0)
+    footprint: np.ndarray | None = None
+
+    def covered(self) -> np.ndarray:
+        """Where the grid has a surface: bool (nx, ny)."""
+        return (np.ones(self.heights.shape, dtype=bool) if self.footprint is None
+                else self.footprint)
 
     def height_at(self, xy) -> np.ndarray:
         """True surface height (m, world z) at points ``xy`` (..., 2), bilinear on the grid;
@@ -317,11 +325,13 @@ def _from_toml(path: Path) -> Surface:
     if np.isnan(heights).mean() > 0.5:
         raise InputError(f"{data_path}: the mesh has no upward-facing surface over most of its "
                          "footprint")
-    heights = np.where(np.isnan(heights), np.nanmin(heights), heights)
+    footprint = ~np.isnan(heights)
+    heights = np.where(footprint, heights, np.nanmin(heights))
     if center is None:
         center = origin[:2] + (np.array(heights.shape) - 1) * cell / 2
     return Surface(path.stem, "mesh", heights, cell, origin, np.asarray(center, dtype=float),
-                   friction, {"file": str(data_path), "cell": cell}, mesh_file=data_path)
+                   friction, {"file": str(data_path), "cell": cell}, mesh_file=data_path,
+                   footprint=footprint)
 
 
 def load_surface(spec: str | os.PathLike) -> Surface:

@@ -191,7 +191,7 @@ class SimWorld:
                                                                           grasp, config)
         self.urdf_text = armar3b_urdf_path().read_text()
         self.torso = np.asarray(torso, dtype=float).copy()
-        self.tcp_from_sponge = tcp_to_sponge(grasp, np.asarray(reference_rotation))
+        self.tcp_from_sponge = tcp_to_sponge(grasp, np.asarray(reference_rotation), base.yaw)
         hand_to_tcp = np.eye(4)
         hand_to_tcp[0, 3] = TCP_OFFSET
         held = {**base.joint_values(), **dict(zip(TORSO_JOINTS, self.torso))}

@@ -1,8 +1,10 @@
 """The adapt stage: learn the force profile of a surface on the simulated ARMAR-IIIb (Sec. II-B).
 
-The model's x-y path is placed on the table (:func:`~wipelab.sim.path.place_model`: centre of
-its bounding box at ``center``, default the surface's wiping centre). The adapted model has
-``kernels`` kernels (50 by default, twice the learn stage's 25: a surface's height profile has
+The model's x-y path (its oscillation scaled by ``amplitude_scale``) is placed on the surface
+and the platform is placed in front of it (:func:`~wipelab.sim.task.place_task`: the
+placement search of :mod:`~wipelab.sim.placement`, checked with the full IK; ``center`` and
+``base`` fix either or both; the choice is in ``metrics.json``, the manifest, the adapted
+model's ``surface`` entry and the logs). The adapted model has ``kernels`` kernels (50 by default, twice the learn stage's 25: a surface's height profile has
 sharper features than a hand's wiping path, and the locally constant fit of eqs. 13-15 smooths
 it by about a kernel width); the x-y path is refitted onto them
 (:func:`~wipelab.sim.path.with_kernels`, its error is in ``metrics.json``, a few hundredths of
@@ -37,10 +39,10 @@ from wipelab.sim.adaptation import Adaptation, AdaptationParams
 from wipelab.sim.metrics import coverage, force_metrics, profile_error
 from wipelab.sim.path import (at_frequency, place_model, refit_error, require_dofs,
                               with_kernels)
-from wipelab.sim.recording import log_run, wiping_blueprint
+from wipelab.sim.recording import log_placement, log_run, wiping_blueprint
 from wipelab.sim.sponge import SpongeParams
 from wipelab.sim.surfaces import load_surface
-from wipelab.sim.task import TaskOptions, WipingTask, build_task
+from wipelab.sim.task import TaskOptions, WipingTask, build_task, place_task
 from wipelab.sim.world import BasePose
 from wipelab.stage_output import staged_output
 
@@ -50,7 +52,7 @@ class AdaptParams:
     """Parameters of ``wipelab adapt`` (CLI flags in brackets)."""
 
     surface: str = "flat"              # [--surface] built-in name or TOML file
-    center: tuple[float, float] | None = None  # [--center] m, world; None: the surface's
+    center: tuple[float, float] | None = None  # [--center] m, world; None: chosen
     amplitude_scale: float = 1.0       # [--amplitude-scale] of the x-y oscillation
     slowdown: float = 4.0              # [--slowdown] Omega is divided by this while learning
     periods: int = 8                   # [--periods] most online learning periods
@@ -58,7 +60,7 @@ class AdaptParams:
     hold_periods: int = 1              # [--hold-periods] at the demonstrated tempo, after
     force: float = 10.0                # [--force] F_0 in N
     feedback: str = "norm"             # [--feedback] fz or norm
-    base: tuple[float, float, float] = (0.0, 0.0, 0.0)  # [--base] x, y (m), yaw (rad)
+    base: tuple[float, float, float] | None = None  # [--base] x, y (m), yaw (rad); None: chosen
     sponge_stiffness: float = 1000.0   # [--sponge-stiffness] N/m
     seed: int = 0                      # [--seed] sensor noise
     kernels: int = 50                  # [--kernels] N of the adapted model (x-y refitted)
@@ -72,8 +74,7 @@ class AdaptParams:
             sponge = SpongeParams(stiffness=self.sponge_stiffness)
         except ValueError as error:
             raise InputError(f"adapt: {error}") from None
-        return TaskOptions(base=BasePose(*self.base), sponge=sponge, compliance=compliance,
-                           seed=self.seed)
+        return TaskOptions(sponge=sponge, compliance=compliance, seed=self.seed)
 
     def adaptation(self) -> AdaptationParams:
         return AdaptationParams(self.slowdown, self.periods, tuple(self.tempos),
@@ -165,12 +166,13 @@ def run_adapt(model_path: str | os.PathLike, out_dir: str | os.PathLike,
     model = read_model(model_path)
     require_dofs(model, ("x", "y"), str(model_path))
     surface = load_surface(params.surface)
-    options = params.task_options()
-    centre = surface.wipe_center if params.center is None else np.asarray(params.center)
-    as_learned = place_model(model, centre, params.amplitude_scale)
-    placed = with_kernels(as_learned, params.kernels)
+    as_learned = place_model(model, (0.0, 0.0), params.amplitude_scale)
+    refitted = with_kernels(as_learned, params.kernels)
+    placement = place_task(refitted, surface, params.task_options(), str(model_path),
+                           params.center, None if params.base is None else BasePose(*params.base))
+    placed = placement.model
     parameters = json_parameters(params)
-    task = build_task(placed, surface, options, str(model_path))
+    task = build_task(placed, surface, placement.options, str(model_path), placement.plan)
     try:
         run = Adaptation(task, placed, params.adaptation())
         with tqdm(desc="adapt", unit="step", disable=quiet, leave=False) as bar:
@@ -180,13 +182,15 @@ def run_adapt(model_path: str | os.PathLike, out_dir: str | os.PathLike,
         source = {"stage": "adapt", "model_sha256": sha256_file(model_path),
                   "parameters": parameters}
         surface_entry = {"spec": params.surface, **surface.describe(),
+                         "placement": placement.record,
                          "learning_frequency_hz": run.learning_omega / (2.0 * math.pi),
                          "tempos_hz": sorted(run.heights),
                          "target_force_n": params.force, "feedback": params.feedback}
         adapted = run.adapted_model(source, surface_entry)
         metrics = _metrics(task, run, trace, adapted, params)
+        metrics["placement"] = placement.record
         metrics["kernels"] = {"model": model.kernels, "adapted": adapted.kernels,
-                              "xy_refit_error_m": refit_error(as_learned, placed, ("x", "y"))}
+                              "xy_refit_error_m": refit_error(as_learned, refitted, ("x", "y"))}
         inputs = {"model": model_path}
         if Path(params.surface).suffix.lower() == ".toml":
             inputs["surface"] = Path(params.surface)
@@ -195,8 +199,10 @@ def run_adapt(model_path: str | os.PathLike, out_dir: str | os.PathLike,
             write_json(tmp / "metrics.json", metrics)
             with StageRecorder(tmp, "adapt", parameters, inputs, wiping_blueprint("adapt")) as rec:
                 log_run(rec, "adapt", task, trace, run.segments, run.profiles, adapted)
+                log_placement(rec, "adapt", float(trace["t"][0]), placement.record)
             write_json(tmp / "manifest.json",
-                       build_manifest("adapt", inputs, parameters, params.seed))
+                       {**build_manifest("adapt", inputs, parameters, params.seed),
+                        "placement": placement.record})
     finally:
         task.close()
     return metrics

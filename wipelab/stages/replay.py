@@ -40,13 +40,12 @@ from wipelab.logs import StageRecorder
 from wipelab.manifest import build_manifest, write_json
 from wipelab.sim.metrics import coverage, force_metrics
 from wipelab.model_file import read_model
-from wipelab.sim.path import (PathGenerator, at_frequency, dof_waveform, place_model,
-                              require_dofs)
-from wipelab.sim.recording import Segment, log_run, wiping_blueprint
+from wipelab.sim.path import PathGenerator, at_frequency, dof_waveform, require_dofs
+from wipelab.sim.recording import Segment, log_placement, log_run, wiping_blueprint
 from wipelab.sim.session import SafetyStop
 from wipelab.sim.sponge import SpongeParams
 from wipelab.sim.surfaces import load_surface
-from wipelab.sim.task import CALIBRATION_LIFT, TaskOptions, WipingTask, build_task
+from wipelab.sim.task import CALIBRATION_LIFT, TaskOptions, WipingTask, build_task, place_task
 from wipelab.sim.world import BasePose
 from wipelab.stage_output import staged_output
 from wipelab.stages.adapt import json_parameters
@@ -74,7 +73,7 @@ class ReplayParams:
     force: float | None = None                 # [--force] F_0 (N)
     feedback: str | None = None                # [--feedback] fz or norm
     center: tuple[float, float] | None = None  # [--center] only for a model without z
-    base: tuple[float, float, float] = (0.0, 0.0, 0.0)  # [--base]
+    base: tuple[float, float, float] | None = None  # [--base] None: as adapted, or chosen
     sponge_stiffness: float = 1000.0           # [--sponge-stiffness] N/m
     seed: int = 0                              # [--seed]
 
@@ -205,19 +204,25 @@ def run_replay(model_path: str | os.PathLike, out_dir: str | os.PathLike,
                                                                            10.0)
     feedback = params.feedback or _model_setting(model, "feedback", "norm")
     try:
-        options = TaskOptions(base=BasePose(*params.base),
-                              sponge=SpongeParams(stiffness=params.sponge_stiffness),
+        options = TaskOptions(sponge=SpongeParams(stiffness=params.sponge_stiffness),
                               compliance=ComplianceParams(target_force=force, feedback=feedback),
                               seed=params.seed)
     except ValueError as error:
         raise InputError(f"replay: {error}") from None
-    if not has_z:
-        centre = surface.wipe_center if params.center is None else np.asarray(params.center)
-        model = place_model(model, centre)
+    base = None if params.base is None else BasePose(*params.base)
+    if has_z:   # the path is where it was adapted; the platform too unless --base moves it
+        adapted = _model_setting(model, "placement", {}).get("base", (0.0, 0.0, 0.0))
+        centre = dof_waveform(model, ("x", "y"))
+        centre = 0.5 * (centre.min(axis=0) + centre.max(axis=0))
+        placement = place_task(model, surface, options, str(model_path), centre,
+                               base or BasePose(*adapted))
+    else:
+        placement = place_task(model, surface, options, str(model_path), params.center, base)
+    model = placement.model
     z_plane = float(np.mean(dof_waveform(model, ("z",)))) if has_z else math.nan
     parameters = json_parameters(replace(params, modes=modes))
     parameters.update(surface=surface_spec, force=force, feedback=feedback)
-    task = build_task(model, surface, options, str(model_path))
+    task = build_task(model, surface, placement.options, str(model_path), placement.plan)
     try:
         session = task.session
         start = dof_waveform(model, ("x", "y"), [0.0])[0]
@@ -241,7 +246,8 @@ def run_replay(model_path: str | os.PathLike, out_dir: str | os.PathLike,
         metrics = {"format": "wipelab.replay_metrics/1", "surface": surface.describe(),
                    "demonstrated_frequency_hz": model.frequency_hz,
                    "learning_frequency_hz": _model_setting(model, "learning_frequency_hz", None),
-                   "max_frequency_hz": task.max_frequency_hz, "target_force_n": force,
+                   "max_frequency_hz": task.max_frequency_hz, "placement": placement.record,
+                   "target_force_n": force,
                    "feedback": feedback, "periods": params.periods, "scales": {}}
         for run in runs:
             metrics["scales"].setdefault(f"{run.scale:g}", {})[run.mode] = \
@@ -255,8 +261,10 @@ def run_replay(model_path: str | os.PathLike, out_dir: str | os.PathLike,
             with StageRecorder(tmp, "replay", parameters, inputs,
                                wiping_blueprint("replay")) as rec:
                 log_run(rec, "replay", task, trace, segments, (), model)
+                log_placement(rec, "replay", float(trace["t"][0]), placement.record)
             write_json(tmp / "manifest.json",
-                       build_manifest("replay", inputs, parameters, params.seed))
+                       {**build_manifest("replay", inputs, parameters, params.seed),
+                        "placement": placement.record})
     finally:
         task.close()
     return metrics
