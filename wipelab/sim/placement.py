@@ -16,10 +16,11 @@ x, y, yaw) and ranks the placements that pass every screen:
   (:class:`~wipelab.sim.reach.ReachMap`).
 
 Score (higher is better): how much of :data:`TARGET_TEMPO` x the demonstrated tempo the arm's
-joint speeds allow (the reach map's gain times the path's speed), up to it, counts 2; the
-joint margin up to :data:`GOOD_MARGIN` counts 1; every :data:`CENTRE_SCALE` of distance from
-the preferred centre (the surface's wiping centre) costs 1 and every 90 degrees of platform
-yaw away from the preferred yaw 0.5 (the robot faces the surface the way the user put it).
+joint speeds allow (the map's pseudo-inverse times the path's velocity), up to it, counts 2;
+the joint margin up to :data:`GOOD_MARGIN` counts 1; every :data:`CENTRE_SCALE` of distance
+from the preferred centre (a surface's declared wiping centre; :data:`LOOSE_CENTRE_SCALE` when
+it only is the middle of the surface) costs 1 and every 90 degrees of platform yaw away from
+the preferred yaw 0.5 (the robot faces the surface the way the user put it).
 
 The placement is relative: the arm's part of the score depends only on where the path lies
 relative to the platform (``offset``: the path centre in the platform's frame) and the yaw;
@@ -77,6 +78,8 @@ TARGET_TEMPO = 1.5
 GOOD_MARGIN = math.radians(15.0)
 #: Distance (m) from the preferred centre that costs as much as the whole margin term.
 CENTRE_SCALE = 0.2
+#: The same when the preferred centre is only the middle of the surface (a tie-breaker).
+LOOSE_CENTRE_SCALE = 2.0
 #: Platform positions (m; yaw counts 0.2 m per rad) closer than this are near-copies.
 DIVERSITY = 0.08
 
@@ -105,6 +108,9 @@ class PlacementRequest:
         Where the path should go if the robot can do it there (m, world).
     preferred_yaw : float
         Platform yaw (rad) the robot should rather have.
+    centre_scale : float
+        Distance (m) from ``preferred_centre`` that costs 1 (CENTRE_SCALE or
+        LOOSE_CENTRE_SCALE).
     centre : ndarray (2,) or None
         A fixed path centre (``--center``).
     base : BasePose or None
@@ -118,6 +124,7 @@ class PlacementRequest:
     sponge_size: np.ndarray
     preferred_centre: np.ndarray
     preferred_yaw: float = 0.0
+    centre_scale: float = CENTRE_SCALE
     centre: np.ndarray | None = None
     base: BasePose | None = None
 
@@ -352,7 +359,7 @@ def choose_placements(request: PlacementRequest, surface: Surface, reach: ReachM
                 continue
             score = (2.0 * np.minimum(fastest / target_hz, 1.0)
                      + np.minimum(margin, GOOD_MARGIN) / GOOD_MARGIN
-                     - distance[group] / CENTRE_SCALE
+                     - distance[group] / request.centre_scale
                      - 0.5 * abs(yaw - request.preferred_yaw) / (math.pi / 2))
             for k in _diverse(np.argsort(-score, kind="stable"), bases[:, :2], count):
                 found.append((float(score[k]), Placement(

@@ -75,6 +75,9 @@ class Surface:
         (about x, about y) in rad for ``flat`` (its collision box is rotated by them).
     footprint : ndarray (nx, ny) of bool, or None
         Where the grid has a surface (a mesh may not cover its bounding box); None: all of it.
+    wipe_center_given : bool
+        Whether ``wipe_center`` was chosen (a built-in's, a TOML's ``wipe_center``) or is only
+        the middle of the grid.
     """
 
     name: str
@@ -88,6 +91,7 @@ class Surface:
     mesh_file: Path | None = None
     tilt: tuple[float, float] = (0.0, 0.0)
     footprint: np.ndarray | None = None
+    wipe_center_given: bool = True
 
     def covered(self) -> np.ndarray:
         """Where the grid has a surface: bool (nx, ny)."""
@@ -196,13 +200,14 @@ def heightfield_surface(name: str, heights, cell: float, origin, wipe_center=Non
     if origin.shape != (3,):
         raise InputError(f"{source}: origin must be [x, y, z] in metres, got {origin.tolist()}")
     heights = heights.astype(float)
-    if wipe_center is None:
+    given = wipe_center is not None
+    if not given:
         extent = (np.array(heights.shape) - 1) * cell
         wipe_center = origin[:2] + extent / 2
     return Surface(name, "heightfield", heights, float(cell), origin,
                    np.asarray(wipe_center, dtype=float), friction,
                    {"file": source, "cell": float(cell), "origin": origin.tolist(),
-                    "shape": list(heights.shape)})
+                    "shape": list(heights.shape)}, wipe_center_given=given)
 
 
 def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -327,11 +332,12 @@ def _from_toml(path: Path) -> Surface:
                          "footprint")
     footprint = ~np.isnan(heights)
     heights = np.where(footprint, heights, np.nanmin(heights))
-    if center is None:
+    given = center is not None
+    if not given:
         center = origin[:2] + (np.array(heights.shape) - 1) * cell / 2
     return Surface(path.stem, "mesh", heights, cell, origin, np.asarray(center, dtype=float),
                    friction, {"file": str(data_path), "cell": cell}, mesh_file=data_path,
-                   footprint=footprint)
+                   footprint=footprint, wipe_center_given=given)
 
 
 def load_surface(spec: str | os.PathLike) -> Surface:

@@ -22,9 +22,10 @@ from wipelab.sim.ik import ArmIK
 from wipelab.sim.ft_sensor import FTSensorParams
 from wipelab.sim.ik import IKParams
 from wipelab.sim.path import PATH_PHASES, dof_waveform, place_model
-from wipelab.sim.placement import (NOMINAL_SPONGE_OFFSET, NOMINAL_TOOL_DROP, REACH_BAND,
-                                   SPONGE_MARGIN, Placement, PlacementError, PlacementRequest,
-                                   choose_placements, platform_outline, sponge_outline)
+from wipelab.sim.placement import (CENTRE_SCALE, LOOSE_CENTRE_SCALE, NOMINAL_SPONGE_OFFSET,
+                                   NOMINAL_TOOL_DROP, REACH_BAND, SPONGE_MARGIN, Placement,
+                                   PlacementError, PlacementRequest, choose_placements,
+                                   platform_outline, sponge_outline)
 from wipelab.sim.session import WipingSession
 from wipelab.sim.sponge import Grasp, SpongeParams, touch
 from wipelab.sim.surfaces import Surface
@@ -300,11 +301,12 @@ class PlacedTask:
 
 
 def place_task(model: PeriodicModel, surface: Surface, options: TaskOptions,
-               source: str = "MODEL", centre=None, base: BasePose | None = None
-               ) -> PlacedTask:
+               source: str = "MODEL", centre=None, base: BasePose | None = None,
+               hip_pitch: float | None = None) -> PlacedTask:
     """Where the path of ``model`` (x-y centred anywhere) goes and how the platform stands.
 
-    With both ``centre`` (m, world) and ``base`` given they are used as they are; otherwise
+    With both ``centre`` (m, world) and ``base`` given they are used as they are (and the
+    torso leans by ``hip_pitch`` if that works: replay keeps adapt's posture); otherwise
     :func:`~wipelab.sim.placement.choose_placements` ranks placements (the missing one
     free) and the best that passes :func:`plan_task` is taken.
 
@@ -319,11 +321,13 @@ def place_task(model: PeriodicModel, surface: Surface, options: TaskOptions,
     relative = path - 0.5 * (path.min(axis=0) + path.max(axis=0))
     if centre is not None and base is not None:
         placed, given = place_model(model, centre), replace(options, base=base)
-        plan = plan_task(placed, surface, given, source)
+        plan = plan_task(placed, surface, given, source, hip_pitch)
         return PlacedTask(placed, given, plan, _placement_record("given", plan, centre))
     request = PlacementRequest(relative, dof_waveform(model, ("x", "y"), derivative=1),
                                model.frequency_hz, np.asarray(NOMINAL_SPONGE_OFFSET),
                                np.asarray(options.sponge.size[:2]), surface.wipe_center,
+                               centre_scale=(CENTRE_SCALE if surface.wipe_center_given
+                                             else LOOSE_CENTRE_SCALE),
                                centre=None if centre is None else np.asarray(centre, float),
                                base=base)
     try:

@@ -210,12 +210,13 @@ def run_replay(model_path: str | os.PathLike, out_dir: str | os.PathLike,
     except ValueError as error:
         raise InputError(f"replay: {error}") from None
     base = None if params.base is None else BasePose(*params.base)
-    if has_z:   # the path is where it was adapted; the platform too unless --base moves it
-        adapted = _model_setting(model, "placement", {}).get("base", (0.0, 0.0, 0.0))
+    if has_z:   # the path, the platform and the torso as adapted, unless --base moves it
+        adapted = _model_setting(model, "placement", {})
         centre = dof_waveform(model, ("x", "y"))
         centre = 0.5 * (centre.min(axis=0) + centre.max(axis=0))
         placement = place_task(model, surface, options, str(model_path), centre,
-                               base or BasePose(*adapted))
+                               base or BasePose(*adapted.get("base", (0.0, 0.0, 0.0))),
+                               adapted.get("torso", [None])[0])
     else:
         placement = place_task(model, surface, options, str(model_path), params.center, base)
     model = placement.model
