@@ -52,9 +52,10 @@ def _common(function):
               help="Scale of the x-y oscillation.")
 @click.option("--slowdown", type=float, default=4.0, show_default=True,
               help="Omega is divided by this for online learning (the paper's stage).")
-@click.option("--tempos", default="1", show_default=True, metavar="S,S,...",
-              help="Refine the profile by iterative learning at these multiples of the "
-                   "demonstrated tempo (after the learning tempo), in increasing order.")
+@click.option("--tempos", default="1", show_default=True, metavar="S,S,...|none",
+              help="Refine the profile by iterative learning at the learning tempo, then at "
+                   "these multiples of the demonstrated tempo; none: keep the paper's "
+                   "profile as learned online.")
 @click.option("--hold-periods", type=int, default=1, show_default=True,
               help="Periods with the learned profile after learning.")
 @click.option("--tolerance", type=float, default=0.002, show_default=True,
@@ -82,7 +83,8 @@ def adapt(model: Path, out_dir: Path, surface: str | None, force: float | None,
     params = AdaptParams(
         surface=surface or "flat", center=comma_separated("--center", center, 2),
         amplitude_scale=amplitude_scale, slowdown=slowdown, periods=periods,
-        tempos=comma_separated("--tempos", tempos), hold_periods=hold_periods, force=10.0 if force is None else force,
+        tempos=() if tempos == "none" else comma_separated("--tempos", tempos),
+        hold_periods=hold_periods, force=10.0 if force is None else force,
         feedback=feedback or "norm", base=comma_separated("--base", base, 3),
         sponge_stiffness=sponge_stiffness, seed=seed, kernels=kernels,
         learning=ProfileLearningParams(tolerance=tolerance, reference=reference))

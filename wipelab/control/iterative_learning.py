@@ -14,7 +14,8 @@ where the plant's lag is not known exactly), tau the sensing delay (the error at
 answers the command a little earlier), k_c the contact stiffness d|F|/dz and gamma < 1 the
 learning gain. The stiffness is not known (sponge, grasp, surface slope): it is measured
 between periods as the secant -<de, dz> / <dz, dz> of the last update dz and the change de of
-the error it caused, starting from a stiff guess (``stiffness``: small first steps).
+the error it caused, over the phases in contact in both periods (out of contact the force
+does not answer), starting from a stiff guess (``stiffness``: small first steps).
 
 Pure numpy: the profile is a waveform on ``grid`` phases; the caller turns it into DMP
 weights to execute it.
@@ -40,6 +41,7 @@ class IterativeLearningParams:
     periods: int = 5                # most learning periods per tempo
     tolerance: float = 0.5          # N: a tempo is learned when the RMS force error is below
     grid: int = 256                 # phases of the profile waveform
+    contact: float = 1.0            # N: force above which a phase counts as in contact
 
     def __post_init__(self):
         low, high = self.stiffness_range
@@ -85,6 +87,8 @@ class IterativeProfile:
         Start profile (m, world z) at :func:`profile_phases`.
     omega : float
         The tempo Omega (rad/s).
+    target_force : float
+        F_0 (N): with the error it gives the force, to tell contact.
     params : IterativeLearningParams
     stiffness : float, optional
         k_c (N/m) to start from (e.g. measured at the previous tempo).
@@ -101,9 +105,9 @@ class IterativeProfile:
         Current k_c (N/m).
     """
 
-    def __init__(self, profile, omega: float, params: IterativeLearningParams,
-                 stiffness: float | None = None):
-        self.params, self.omega = params, float(omega)
+    def __init__(self, profile, omega: float, target_force: float,
+                 params: IterativeLearningParams, stiffness: float | None = None):
+        self.params, self.omega, self.target_force = params, float(omega), float(target_force)
         self.profile_ = np.asarray(profile, dtype=float).copy()
         if self.profile_.shape != (params.grid,):
             raise ValueError(f"profile must have {params.grid} phases")
@@ -112,7 +116,7 @@ class IterativeProfile:
         self.stiffness_ = float(params.stiffness if stiffness is None else stiffness)
         self._phases: list[float] = []
         self._errors: list[float] = []
-        self._last_update: tuple[np.ndarray, np.ndarray] | None = None   # (dz, filtered error)
+        self._last_update: tuple | None = None   # (dz, filtered error, in contact) of the last
 
     def record(self, phase: float, force_error: float) -> None:
         """One control period: the commanded phase (rad) and the force error |F| - F_0 (N)
@@ -132,14 +136,18 @@ class IterativeProfile:
         # the error at phase phi answers the command at phi - Omega tau
         error = phase_average(np.array(self._phases) - self.omega * p.lead, errors, p.grid)
         error = periodic_gaussian(error, p.smoothing * self.omega / (2.0 * math.pi) * p.grid)
+        touching = error + self.target_force > p.contact
         self._phases, self._errors = [], []
         if self._last_update is not None:
-            step, before = self._last_update
-            if np.sqrt(np.mean(step ** 2)) > 2e-4:      # a step the force noise cannot hide
-                measured = -float(np.dot(error - before, step) / np.dot(step, step))
+            step, before, touched = self._last_update
+            both = touching & touched
+            # a step the force noise cannot hide, over a good part of the period
+            if both.mean() > 0.25 and np.sqrt(np.mean(step[both] ** 2)) > 2e-4:
+                measured = -float(np.dot((error - before)[both], step[both])
+                                  / np.dot(step[both], step[both]))
                 self.stiffness_ = float(np.clip(measured, *p.stiffness_range))
         step = p.gain * error / self.stiffness_
         self.profile_ = self.profile_ + step
-        self._last_update = (step, error)
+        self._last_update = (step, error, touching)
         stalled = len(self.errors_) >= 3 and min(self.errors_[-2:]) > 0.9 * min(self.errors_[:-2])
         return rms > p.tolerance and len(self.errors_) < p.periods and not stalled

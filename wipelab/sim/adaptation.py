@@ -11,7 +11,8 @@
    (:class:`~wipelab.control.force_profile.ProfileLearningParams`), until the profile
    changes by less than the tolerance over a period or after ``periods`` periods;
 3. refining at increasing tempos: the learning tempo first, then each of ``tempos`` (multiples
-   of the demonstrated frequency), each starting from the profile learned so far, by iterative
+   of the demonstrated frequency; none: the paper's profile as it is), each starting from the
+   profile learned so far, by iterative
    learning control of the height profile without force feedback
    (:mod:`~wipelab.control.iterative_learning`); a tempo the arm cannot follow is refined at
    the fastest it can (:meth:`~wipelab.sim.task.WipingTask.executable_frequency`); each new
@@ -213,7 +214,10 @@ class Adaptation:
         self.heights[omega / (2.0 * math.pi)] = self._online_profile()
 
     def _tempos_hz(self) -> list[float]:
-        """The tempos (Hz) to refine at: the learning tempo, then the faster of ``tempos``."""
+        """The tempos (Hz) to refine at: the learning tempo, then the faster of ``tempos``;
+        none without ``tempos`` (the paper's profile)."""
+        if not self.params.tempos:
+            return []
         slow = self.learning_omega / (2.0 * math.pi)
         faster = sorted(t * self.model.frequency_hz for t in self.params.tempos)
         return [slow] + [f for f in faster if f > slow * (1.0 + 1e-9)]
@@ -234,7 +238,8 @@ class Adaptation:
                            params.stiffness if previous is None else previous.stiffness)
         self.stages.append(stage)
         self.segments.append(Segment(f"refining at {frequency:.3g} Hz", REFINE, session.time))
-        learning = IterativeProfile(heights, omega, params, stage.stiffness)
+        learning = IterativeProfile(heights, omega, session.compliance.target_force, params,
+                                    stage.stiffness)
         path = PathGenerator(self._profile_model(learning.profile_), ("x", "y", "z"),
                              phase=self._path.phase)
         yield from self._ramp(path, omega_from, omega, REFINE)
