@@ -158,7 +158,7 @@ def force_error_bars_figure(rms_error: dict[str, dict[str, float]], title: str) 
 
     Parameters
     ----------
-    rms_error : dict scale label -> {mode: RMS error in N}
+    rms_error : dict tempo label (scale and Hz) -> {mode: RMS error in N}
     title : str
     """
     scales = list(rms_error)
@@ -171,8 +171,8 @@ def force_error_bars_figure(rms_error: dict[str, dict[str, float]], title: str) 
         values = [rms_error[s].get(mode, np.nan) for s in scales]
         bars = ax.bar(x + (i - (len(modes) - 1) / 2) * width, values, width, label=mode)
         ax.bar_label(bars, fmt="%.2f", fontsize="x-small", padding=1)
-    ax.set_xticks(x, [f"{s}x" for s in scales])
-    ax.set_xlabel("frequency scale (x learning frequency)")
+    ax.set_xticks(x, scales)
+    ax.set_xlabel("tempo (x demonstrated, and in Hz)")
     ax.set_ylabel("RMS(|F| - F0) (N)")
     ax.set_title(title)
     ax.grid(True, axis="y", linewidth=0.5, alpha=0.5)

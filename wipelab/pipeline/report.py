@@ -193,7 +193,8 @@ def _replay_figures(stage_dir: Path, out: Path) -> list[ReportFigure]:
     metrics, figure = _contact_figure(stage_dir, "replay")
     names = [f"{stage_dir.name}_height_force.png", f"{stage_dir.name}_force_error.png"]
     _save(figure, out / names[0])
-    rms = {scale: {mode: values.get("rms_force_error_n", np.nan) for mode, values in modes.items()}
+    rms = {f"{scale}x\n{next(iter(modes.values())).get('frequency_hz', np.nan):.2f} Hz":
+           {mode: values.get("rms_force_error_n", np.nan) for mode, values in modes.items()}
            for scale, modes in metrics["scales"].items()}
     surface = metrics.get("surface", {}).get("name", "?")
     _save(force_error_bars_figure(rms, f"{stage_dir.name}: force error on '{surface}' as the "

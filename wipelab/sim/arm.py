@@ -38,7 +38,7 @@ LIMIT_MARGIN = np.radians(5.0)
 REACH_TOLERANCE = 0.002
 #: Fraction of the IK's joint speed limit that a planned movement may use (the rest is for
 #: the force feedback's corrections).
-SPEED_FRACTION = 0.85
+SPEED_FRACTION = 0.95
 
 
 @dataclass(frozen=True)
