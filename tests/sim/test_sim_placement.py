@@ -85,6 +85,16 @@ def test_a_fixed_platform_pose_is_kept():
     assert (best.base.x, best.base.y, best.base.yaw) == (base.x, base.y, base.yaw)
 
 
+def test_the_sponge_beside_the_hand_must_stay_on_the_surface_too():
+    surface = flat_surface()                          # y from -0.70 to 0.30
+    on_table = np.array([0.6, 0.19])                  # the path reaches y = 0.29
+    with pytest.raises(PlacementError, match="does not fit on the surface 'flat' there"):
+        choose_placements(circle_request(surface, centre=on_table), surface, ball_arm(), 2.5)
+    best = choose_placements(circle_request(surface, centre=on_table - [0, 0.25]), surface,
+                             ball_arm(), 2.5)[0]
+    assert best.centre == pytest.approx(on_table - [0, 0.25])
+
+
 def test_refuses_a_surface_too_small_or_too_high_saying_so():
     small = heightfield_surface("stool", np.zeros((21, 21)), 0.01, [0.5, -0.3, 0.7])
     with pytest.raises(PlacementError, match="does not fit on the surface 'stool' anywhere"):

@@ -133,7 +133,8 @@ def replay(model: Path, more_scales: tuple[float, ...], out_dir: Path, surface: 
     params = ReplayParams(surface=surface, frequency_scales=all_scales,
                           modes=tuple(modes) or MODES, periods=periods,
                           warmup_periods=warmup_periods, force=force, feedback=feedback,
-                          center=comma_separated("--center", center, 2), base=comma_separated("--base", base, 3),
+                          center=comma_separated("--center", center, 2),
+                          base=comma_separated("--base", base, 3),
                           sponge_stiffness=sponge_stiffness, seed=seed)
     metrics = run_replay(model, out_dir, params, quiet=quiet)
     if quiet:

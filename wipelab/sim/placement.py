@@ -322,9 +322,10 @@ def choose_placements(request: PlacementRequest, surface: Surface, reach: ReachM
     passed = {"surface": 0, "platform": 0, "reach": 0}
     for yaw in yaws:
         kernel, origin = _raster(_sponge_swept(request, yaw))
-        outside = _Grid(footprint.origin, ~footprint.mask)
-        fits = ~_overlap(outside, kernel, origin, kernel.shape[0] + kernel.shape[1]).at(
-            centres, outside=True)
+        border = max(kernel.shape)                     # beyond the grid: no surface either
+        outside = _Grid(footprint.origin - border * CENTRE_STEP,
+                        np.pad(~footprint.mask, border, constant_values=True))
+        fits = ~_overlap(outside, kernel, origin, 0).at(centres, outside=True)
         passed["surface"] += int(fits.sum())
         platform = _overlap(footprint, *_raster(platform_outline(BasePose(yaw=yaw))), pad)
         rotation = _rotation(yaw)

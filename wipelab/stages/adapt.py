@@ -4,9 +4,10 @@ The model's x-y path (its oscillation scaled by ``amplitude_scale``) is placed o
 and the platform is placed in front of it (:func:`~wipelab.sim.task.place_task`: the
 placement search of :mod:`~wipelab.sim.placement`, checked with the full IK; ``center`` and
 ``base`` fix either or both; the choice is in ``metrics.json``, the manifest, the adapted
-model's ``surface`` entry and the logs). The adapted model has ``kernels`` kernels (50 by default, twice the learn stage's 25: a surface's height profile has
-sharper features than a hand's wiping path, and the locally constant fit of eqs. 13-15 smooths
-it by about a kernel width); the x-y path is refitted onto them
+model's ``surface`` entry and the logs). The adapted model has ``kernels`` kernels (50 by
+default, twice the learn stage's 25: a surface's height profile has sharper features than a
+hand's wiping path, and the locally constant fit of eqs. 13-15 smooths it by about a kernel
+width); the x-y path is refitted onto them
 (:func:`~wipelab.sim.path.with_kernels`, its error is in ``metrics.json``, a few hundredths of
 a millimetre). Then :class:`~wipelab.sim.adaptation.Adaptation` runs: online learning at the
 slowed-down tempo as in the paper, refining by iterative learning at the learning tempo and
