@@ -150,7 +150,9 @@ def main() -> None:
                        ReplayParams(frequency_scales=SCALES, modes=MODES, periods=args.periods),
                        quiet=True)
         for scale, runs in r["scales"].items():
-            row = [name, f"{float(scale):g}x", fmt(next(iter(runs.values()))["frequency_hz"])]
+            first = next(iter(runs.values()))
+            row = [name, f"{float(scale):g}x",
+                   fmt(first["frequency_hz"]) + ("*" if first["arm_limited"] else "")]
             for mode in MODES:
                 run = runs[mode]
                 stop = " STOP" if run["safety_stop"] else ""
@@ -177,7 +179,9 @@ def main() -> None:
                  "safety stop"], learn_rows))
     print(f"\nReplay: RMS(|F| - F0) N / contact % / peak N per mode (F0 = 10 N; targets for "
           f"the learned profile at 1x and 1.5x: RMS <= {TARGET_RMS:g} N (aim 1.5), contact "
-          f">= {100 * TARGET_CONTACT:g} %, peak <= {TARGET_PEAK:g} N, no safety stop)")
+          f">= {100 * TARGET_CONTACT:g} %, peak <= {TARGET_PEAK:g} N, no safety stop; "
+          f"Hz*: the arm's joint speeds cannot follow the tempo asked for, the run went as "
+          f"fast as they can)")
     print(table(["surface", "tempo", "Hz", *MODES], replay_rows))
     print("\nWorst case over the surfaces (learned profile)")
     rows = []

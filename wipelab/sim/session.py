@@ -174,11 +174,13 @@ class WipingSession:
         return _exhaust(self.calibrating())
 
     def moving_to(self, position, seconds: float, mode: int = 0) -> Iterator[None]:
-        """:meth:`move_to`, one control period per iteration."""
+        """:meth:`move_to`, one control period per iteration (the physics rate set for the
+        move's top speed)."""
         start = (self.world.tcp_pose()[0] if not len(self.trace)
                  else np.asarray(self.trace.last("tcp_cmd"), dtype=float))
         goal = np.asarray(position, dtype=float)
         n = max(1, int(round(seconds / self.dt)))
+        self.world.set_tool_speed(1.5 * float(np.linalg.norm(goal - start)) / (n * self.dt))
         for k in range(1, n + 1):
             s = k / n
             target = start + s * s * (3.0 - 2.0 * s) * (goal - start)
