@@ -201,6 +201,24 @@ def main() -> None:
         shutil.rmtree(work)
 
 
+def placement_speed(model_path: Path) -> list:
+    """Wall time of the placement (search and full check) on the flat table, in this
+    process with the compiled kernels loaded (best of 3)."""
+    from wipelab.model_file import read_model
+    from wipelab.sim.surfaces import load_surface
+    from wipelab.sim.task import TaskOptions, place_task
+
+    model, surface = read_model(model_path), load_surface("flat")
+    place_task(model, surface, TaskOptions())
+    times = []
+    for _ in range(3):
+        start = time.perf_counter()
+        place_task(model, surface, TaskOptions())
+        times.append(time.perf_counter() - start)
+    return ["placement: search + full check (in process)", "-", f"{min(times):.2f}", "-", "-",
+            f"{os.getloadavg()[0]:.1f}"]
+
+
 def speed(work: Path) -> None:
     """Whole commands in new processes, and what their fixed start-up is made of."""
     model = work / "model_flat.json"
@@ -217,7 +235,7 @@ def speed(work: Path) -> None:
                                            "RightArm({}).posture_for([0.6, -0.3, 0.9], "
                                            "np.array([[0.6, -0.3, 0.9]]))"],
     }
-    rows = []
+    rows = [placement_speed(model)]
     for name, command in probes.items():
         wall, cpu = min((timed_process(command) for _ in range(3)), key=lambda t: t[0])
         rows.append([name, "-", f"{wall:.2f}", f"{cpu:.2f}", "-", f"{os.getloadavg()[0]:.1f}"])

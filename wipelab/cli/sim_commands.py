@@ -92,8 +92,19 @@ def adapt(model: Path, out_dir: Path, surface: str | None, force: float | None,
     learning, profile = metrics["learning"], metrics["profile_last_learning_period"]
     state = "converged" if learning["converged"] else "not converged"
     if not quiet:
-        click.echo(f"adapt: {state} after {learning['periods']} periods; learned height RMS "
-                   f"error {1000 * profile['rms_height_error_m']:.1f} mm -> {out_dir}")
+        place = metrics["placement"]
+        (cx, cy), (bx, by, yaw) = place["center"], place["base"]
+        click.echo(f"adapt: path centred at ({cx:.2f}, {cy:.2f}) m, platform at ({bx:.2f}, "
+                   f"{by:.2f}) m, yaw {yaw:.2f} rad; the arm follows up to "
+                   f"{place['max_frequency_hz']:.2f} Hz")
+        for stage in metrics["tempos"]:
+            limited = " (the arm's fastest)" if stage["arm_limited"] else ""
+            click.echo(f"adapt: refined at {stage['frequency_hz']:.2f} Hz{limited}: RMS(|F|-F0) "
+                       f"{stage['rms_force_error_n'][0]:.2f} -> "
+                       f"{min(stage['rms_force_error_n']):.2f} N in {stage['periods']} periods")
+        click.echo(f"adapt: online learning {state} after {learning['periods']} periods; "
+                   f"learned height RMS error {1000 * profile['rms_height_error_m']:.1f} mm "
+                   f"-> {out_dir}")
     if metrics["safety_stop"]:
         click.echo(f"warning: safety stop: {metrics['safety_stop']}", err=True)
 
