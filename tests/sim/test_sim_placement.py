@@ -132,3 +132,15 @@ def test_real_arm_placements_pass_the_full_check(spec, tmp_path):
 def test_real_arm_refusal_names_the_limit():
     with pytest.raises(InputError, match="MODEL: the arm cannot reach the movement"):
         place_task(circle_model(), flat_surface(height=1.4), TaskOptions())
+
+
+def test_a_sponge_held_off_to_one_side_of_the_whole_path():
+    """The sponge's footprint need not contain the path's centre (a short stroke, the sponge
+    beside the hand)."""
+    surface = flat_surface()
+    phase = np.linspace(0, 2 * math.pi, 64, endpoint=False)
+    path = np.column_stack([0.01 * np.sin(phase), np.zeros_like(phase)])
+    request = PlacementRequest(path, np.gradient(path, axis=0), 1.0, np.array([0.04, 0.25]),
+                               np.array([0.10, 0.07]), surface.wipe_center)
+    best = choose_placements(request, surface, ball_arm(), 2.5)[0]
+    assert best.centre == pytest.approx(surface.wipe_center)

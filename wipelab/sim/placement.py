@@ -187,10 +187,11 @@ def _footprint(surface: Surface) -> _Grid:
 
 def _raster(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Cells of the CENTRE_STEP grid (relative to (0, 0)) covered by points (k, 2) (m): a
-    kernel (kx, ky) bool and the index of the (0, 0) offset in it."""
+    kernel (kx, ky) bool and the index of the (0, 0) offset in it (the kernel spans it even
+    when no point is there)."""
     index = np.rint(points / CENTRE_STEP).astype(int)
-    low = index.min(axis=0)
-    kernel = np.zeros(index.max(axis=0) - low + 1, dtype=bool)
+    low = np.minimum(index.min(axis=0), 0)
+    kernel = np.zeros(np.maximum(index.max(axis=0), 0) - low + 1, dtype=bool)
     kernel[index[:, 0] - low[0], index[:, 1] - low[1]] = True
     return kernel, -low
 
