@@ -287,7 +287,7 @@ def build_task(model: PeriodicModel, surface: Surface, options: TaskOptions,
 
 
 #: Placements from the search that are checked with the full IK, best first.
-PLACEMENT_CANDIDATES = 8
+PLACEMENT_CANDIDATES = 16
 
 
 @dataclass(frozen=True)
