@@ -179,9 +179,9 @@ class Adaptation:
         yield from session.calibrating()
         yield from session.moving_to(start, 0.8, mode=MOVE)
 
-    def _online_profile(self, phases=None) -> np.ndarray:
-        phases = profile_phases(self.params.iterative.grid) if phases is None else phases
-        return self.learner.waveform(phases)
+    def _online_profile(self) -> np.ndarray:
+        """The online learner's profile on the iterative learning's phase grid."""
+        return self.learner.waveform(profile_phases(self.params.iterative.grid))
 
     def _learn_online(self):
         """Step 2: the paper's online learning at the slowed-down tempo."""
