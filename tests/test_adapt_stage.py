@@ -1,6 +1,7 @@
 """The adapt and replay stages end to end on the simulated robot, and their CLI errors."""
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -11,12 +12,13 @@ from mcap.reader import make_reader
 from wipelab.cli import cli
 from wipelab.learning import PeriodicModel
 from wipelab.logs import read_mcap_scalars, read_mcap_topic
+from wipelab.logs.palette import segment_colour
 from wipelab.sim.adaptation import Adaptation, AdaptationParams
 from wipelab.sim.path import at_frequency, with_kernels
 from wipelab.sim.surfaces import flat_surface
 from wipelab.sim.task import TaskOptions, build_task, place_task
 from wipelab.stages.adapt import AdaptParams, run_adapt
-from wipelab.stages.replay import ReplayParams, run_replay
+from wipelab.stages.replay import ReplayParams, RunResult, run_replay
 
 from sim.sim_models import circle_model
 
@@ -97,6 +99,9 @@ def test_adapt_logs_read_back(adapted):
     # the F/T calibration records nothing: it is named, and the series break there
     states = [m["state"] for _, m in read_mcap_topic(out / "adapt.mcap", "/adapt/segment")]
     assert states[:4] == ["approach", "F/T calibration", "approach", "learning"]
+    refining = [state for state in states if state.startswith("refining at ")]
+    assert len(refining) == 2 and len({segment_colour(state) for state in (
+        "approach", "learning", refining[0], "learned profile")}) == 4   # its own colour
     t, force, _ = read_mcap_scalars(out / "adapt.mcap", "/adapt/force_norm")
     gap = np.argmax(np.diff(t))
     assert np.isnan(force[gap]).all() and not np.isnan(force[gap + 1]).any()
@@ -151,6 +156,15 @@ def test_replay_holds_the_force_at_the_demonstrated_tempo_where_the_baselines_do
             [metrics["scales"][s][mode]["frequency_hz"] for s in ("1", "1.5")])
     for curve in curves["learned_compliance"]:
         assert np.nanmean(np.array(curve["force_n"], dtype=float)) == pytest.approx(10.0, abs=1.5)
+    for curve in curves["planar"]:
+        assert np.isfinite(np.array(curve["force_n"], dtype=float)).any()
+
+
+def test_a_replay_run_stopped_in_its_warm_up_is_scored_and_drawn_up_to_the_stop():
+    stopped = RunResult(1.0, "planar", 1.0, 1.0, motion_start=5.0, start=6.0, end=5.5,
+                        planned=1.0, stop_reason="|F| = 80 N exceeded the safety limit")
+    assert stopped.scored() == (5.0, 5.5)
+    assert replace(stopped, end=7.0).scored() == (6.0, 7.0)
 
 
 def test_refining_at_the_demonstrated_tempo_holds_the_force_on_a_bowl(model_file, tmp_path):

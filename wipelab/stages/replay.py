@@ -105,6 +105,11 @@ class RunResult:
     planned: float        # s: planned scored duration
     stop_reason: str | None
 
+    def scored(self) -> tuple[float, float]:
+        """The scored window (start, end] s; a run stopped during its warm-up is scored from
+        the start of its movement to the stop."""
+        return (self.start if self.end > self.start else self.motion_start), self.end
+
 
 def _model_setting(model: PeriodicModel, key: str, default):
     return (model.surface or {}).get(key, default)
@@ -162,10 +167,9 @@ def _run_one(task: WipingTask, model: PeriodicModel, scale: float, mode: str, la
 
 
 def _run_metrics(task: WipingTask, trace: dict, run: RunResult, target_force: float) -> dict:
-    """Metrics of the scored window; a run stopped during its warm-up is scored from the start
-    of its movement to the stop."""
-    start = run.start if run.end > run.start else run.motion_start
-    window = (trace["t"] > start) & (trace["t"] <= run.end)
+    """Metrics of the run's scored window (:meth:`RunResult.scored`)."""
+    start, end = run.scored()
+    window = (trace["t"] > start) & (trace["t"] <= end)
     tempo = {"frequency_hz": run.frequency_hz, "requested_frequency_hz": run.requested_hz,
              "arm_limited": run.frequency_hz < run.requested_hz - 1e-9}
     if not window.any():
@@ -263,7 +267,7 @@ def run_replay(model_path: str | os.PathLike, out_dir: str | os.PathLike,
             with StageRecorder(tmp, "replay", parameters, inputs,
                                replay_blueprint(trace, modes)) as rec:
                 log_run(rec, "replay", task, trace, segments, (), model,
-                        [ReplayRun(run.mode, run.scale, run.frequency_hz, run.start, run.end)
+                        [ReplayRun(run.mode, run.scale, run.frequency_hz, *run.scored())
                          for run in runs])
                 log_placement(rec, "replay", float(trace["t"][0]), placement.record)
             write_json(tmp / "manifest.json",
