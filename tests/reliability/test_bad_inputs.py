@@ -84,6 +84,15 @@ def model(**changes) -> Setup:
     return setup
 
 
+def placed(placement) -> Setup:
+    """a.json: the adapted model with ``placement`` as where adapt placed the robot."""
+    def setup(ws: Path) -> None:
+        content = json.loads((ws / "adapted.json").read_text())
+        content["surface"]["placement"] = placement
+        (ws / "a.json").write_text(json.dumps(content))
+    return setup
+
+
 def csv(rows: list[str], header: str = "t,x,y") -> Setup:
     return text("t.csv", "\n".join([header, *rows]) + "\n")
 
@@ -354,6 +363,10 @@ CASES = [
          "positive scales"),
     Case("replay", "scale-seven", ("adapted.json", *LEARN_OUT, "--frequency-scale", "7"), "--frequency-scale",
          "at most 4 times the demonstrated tempo"),
+    Case("replay", "placement-text", ("a.json", *LEARN_OUT), "a.json", "surface.placement is not what adapt writes",
+         placed("here")),
+    Case("replay", "placement-base-two-values", ("a.json", *LEARN_OUT), "a.json",
+         "surface.placement is not what adapt writes", placed({"base": [0.1, 0.2]})),
     Case("replay", "base-text", ("adapted.json", *LEARN_OUT, "--base", "x"), "--base", "3 comma-separated"),
     Case("replay", "surface-not-toml", ("adapted.json", *LEARN_OUT, "--surface", "s.toml"), "s.toml",
          "not valid TOML", text("s.toml", "[")),

@@ -115,6 +115,22 @@ def _model_setting(model: PeriodicModel, key: str, default):
     return (model.surface or {}).get(key, default)
 
 
+def _adapted_pose(model: PeriodicModel, source: str) -> tuple[BasePose, float | None]:
+    """The platform pose and the hip pitch (rad) adapt placed the robot with (the model's
+    ``surface.placement``); the platform at the origin for a model without one."""
+    placement = _model_setting(model, "placement", {})
+    try:
+        x, y, yaw = (float(value) for value in placement.get("base", (0.0, 0.0, 0.0)))
+        hip = placement.get("torso", [None])[0]
+        hip = None if hip is None else float(hip)
+        if not all(map(math.isfinite, (x, y, yaw, 0.0 if hip is None else hip))):
+            raise ValueError
+    except (AttributeError, TypeError, ValueError, IndexError, KeyError):
+        raise InputError(f"{source}: surface.placement is not what adapt writes (base: x, y, "
+                         "yaw; torso: hip pitch first)") from None
+    return BasePose(x, y, yaw), hip
+
+
 def _lower_onto(task: WipingTask, xy: np.ndarray, z: float, label: int) -> None:
     session = task.session
     session.move_to([*xy, task.start_height + 0.03], 0.8, mode=MOVE)
@@ -216,12 +232,11 @@ def run_replay(model_path: str | os.PathLike, out_dir: str | os.PathLike,
         raise InputError(f"replay: {error}") from None
     base = None if params.base is None else BasePose(*params.base)
     if has_z:   # the path, the platform and the torso as adapted, unless --base moves it
-        adapted = _model_setting(model, "placement", {})
+        adapted_base, hip_pitch = _adapted_pose(model, str(model_path))
         centre = dof_waveform(model, ("x", "y"))
         centre = 0.5 * (centre.min(axis=0) + centre.max(axis=0))
         placement = place_task(model, surface, options, str(model_path), centre,
-                               base or BasePose(*adapted.get("base", (0.0, 0.0, 0.0))),
-                               adapted.get("torso", [None])[0])
+                               base or adapted_base, hip_pitch)
     else:
         placement = place_task(model, surface, options, str(model_path), params.center, base)
     model = placement.model
