@@ -1,17 +1,17 @@
-"""How well the robot's hand followed the person: its lag and when it started to follow.
+"""How well the robot's hand followed the person: its lag, and from when it followed.
 
-Both movements normalised to the demonstration area (Fig. 3; the hand's through the
-placement that put the demonstration in front of the robot), sampled at the frame times:
+Both movements are normalised to the demonstration area (Fig. 3; the hand's through the
+placement that put the demonstration in front of the robot) and sampled at the frame times:
 
 * lag: the delay tau (s) that best aligns the hand with the demonstration over the second
-  half of the imitation (least squares over a grid of 1/4 frame; the paper reports about
-  0.2 s between the demonstration and the learned waveform, Fig. 5);
-* per period from the lock on (windows of one period of the learned frequency): the RMS of
-  hand(t) - demonstration(t - tau) over both DOFs, as a fraction of the demonstration's mean
-  peak-to-peak; the hand follows from the first window from which every later one is
-  within :data:`FOLLOW_TOLERANCE`;
-* periods until it follows: from the first tracked frame to the end of that window, in
-  periods of the learned frequency.
+  half of the imitation (least squares, tau on a grid of a quarter frame from -1/4 to +1/2
+  period; the paper reports about 0.2 s between the demonstration and the learned waveform,
+  Fig. 5);
+* the error at time t: the RMS over the next period of hand(t') - demonstration(t' - tau)
+  (both DOFs), as a fraction of the demonstration's mean peak-to-peak;
+* the hand follows from the first frame from which the error stays within
+  :data:`FOLLOW_TOLERANCE` until imitation ends; ``periods_until_following`` counts the
+  periods of the learned frequency from the first tracked frame to then.
 """
 
 from __future__ import annotations
@@ -20,25 +20,24 @@ import math
 
 import numpy as np
 
-#: Largest RMS difference (of the peak-to-peak) of a period in which the hand follows.
+#: Largest RMS difference (of the peak-to-peak) over a period in which the hand follows.
 FOLLOW_TOLERANCE = 0.10
 
 
-def _shifted(t: np.ndarray, demo: np.ndarray, tau: float) -> np.ndarray:
-    """demo(t - tau) (n, d) by linear interpolation between its valid samples (NaN outside
-    them or across a gap longer than two samples)."""
-    out = np.full((len(t), demo.shape[1]), np.nan)
-    valid = np.isfinite(demo).all(axis=1)
-    if valid.sum() < 2:
+def shifted(t: np.ndarray, values: np.ndarray, tau: float) -> np.ndarray:
+    """values(t - tau) (n, d) by linear interpolation between the finite rows of ``values``
+    (n, d) at times ``t`` (n,); NaN outside them or across a gap of more than two samples."""
+    out = np.full((len(t), values.shape[1]), np.nan)
+    finite = np.isfinite(values).all(axis=1)
+    if finite.sum() < 2:
         return out
-    tv = t[valid]
+    tv = t[finite]
     query = t - tau
-    inside = (query >= tv[0]) & (query <= tv[-1])
     right = np.clip(np.searchsorted(tv, query), 1, len(tv) - 1)
-    dt = np.median(np.diff(t)) if len(t) > 1 else 1.0
-    close = inside & (tv[right] - tv[right - 1] <= 2.5 * dt)
-    for j in range(demo.shape[1]):
-        out[close, j] = np.interp(query[close], tv, demo[valid, j])
+    dt = float(np.median(np.diff(t)))
+    close = (query >= tv[0]) & (query <= tv[-1]) & (tv[right] - tv[right - 1] <= 2.5 * dt)
+    for j in range(values.shape[1]):
+        out[close, j] = np.interp(query[close], tv, values[finite, j])
     return out
 
 
@@ -53,42 +52,45 @@ def following_metrics(t: np.ndarray, demo: np.ndarray, hand: np.ndarray, frequen
     demo, hand : ndarray, shape (n, d)
         The demonstration (NaN where not tracked) and the hand, normalised.
     frequency_hz : float
-        The learned frequency (the window length is one period).
+        The learned frequency (the error's window is one period).
     lock_time, first_tracked, end_time : float
         When the learner locked (the hand starts to imitate), the sponge was first tracked,
         imitation ended (s).
     """
     period = 1.0 / frequency_hz
-    during = (t >= lock_time) & (t <= end_time)
-    late = during & (t >= 0.5 * (lock_time + end_time))
     dt = float(np.median(np.diff(t)))
-    lags = np.arange(0.0, 0.5 * period, 0.25 * dt)
-    errors = []
+    late = (t >= 0.5 * (lock_time + end_time)) & (t <= end_time)
+    lags = np.arange(-0.25 * period, 0.5 * period, 0.25 * dt)
+    costs = []
     for tau in lags:
-        shifted = _shifted(t, demo, tau)
-        both = late & np.isfinite(shifted).all(axis=1)
-        errors.append(np.mean((hand[both] - shifted[both]) ** 2) if both.sum() > 5 else np.inf)
-    tau = float(lags[int(np.argmin(errors))])
-    shifted = _shifted(t, demo, tau)
-    valid = np.isfinite(demo).all(axis=1) & during
-    span = float(np.mean(np.ptp(demo[valid], axis=0))) if valid.any() else math.nan
-    windows = []
-    start = lock_time
-    while start + period <= end_time + 1e-9:
-        inside = (t >= start) & (t < start + period) & np.isfinite(shifted).all(axis=1)
-        rms = math.sqrt(np.mean((hand[inside] - shifted[inside]) ** 2)) / span \
-            if inside.sum() > 2 else math.nan
-        windows.append((start + period, rms))
-        start += period
+        aligned = shifted(t, demo, tau)
+        both = late & np.isfinite(aligned).all(axis=1)
+        costs.append(np.mean((hand[both] - aligned[both]) ** 2) if both.sum() > 5 else np.inf)
+    tau = float(lags[int(np.argmin(costs))])
+    aligned = shifted(t, demo, tau)
+    during = (t >= lock_time) & (t <= end_time)
+    observed = np.isfinite(demo).all(axis=1) & during
+    span = float(np.mean(np.ptp(demo[observed], axis=0))) if observed.sum() > 2 else math.nan
+    squared = np.sum((hand - aligned) ** 2, axis=1) / hand.shape[1]
+    usable = np.isfinite(squared) & during
+    frames = int(round(period / dt))
+    starts = np.flatnonzero(during & (t + period <= end_time + 1e-9))
+    error = np.full(len(t), np.nan)
+    for k in starts:
+        window = usable[k:k + frames]
+        if window.sum() > 0.5 * frames:
+            error[k] = math.sqrt(np.mean(squared[k:k + frames][window])) / span
     follows_from = None
-    for k in range(len(windows)):
-        if all(rms <= FOLLOW_TOLERANCE for _, rms in windows[k:]):
-            follows_from = windows[k][0]
+    checked = error[starts]
+    for i in range(len(starts)):
+        if np.all(checked[i:][np.isfinite(checked[i:])] <= FOLLOW_TOLERANCE):
+            follows_from = float(t[starts[i]])
             break
-    steady = [rms for end, rms in windows if end > 0.5 * (lock_time + end_time)]
+    steady = error[late]
     return {"lag_s": tau, "tolerance": FOLLOW_TOLERANCE,
-            "rms_per_period": [rms for _, rms in windows],
-            "steady_rms": float(np.nanmean(steady)) if steady else None,
+            "steady_rms": float(np.nanmean(steady)) if np.isfinite(steady).any() else None,
             "follows_from_s": follows_from,
             "periods_until_following": None if follows_from is None
-            else (follows_from - first_tracked) * frequency_hz}
+            else (follows_from - first_tracked) * frequency_hz,
+            "periods_after_lock": None if follows_from is None
+            else (follows_from - lock_time) * frequency_hz}

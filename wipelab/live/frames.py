@@ -42,7 +42,8 @@ class FramePair:
     left, right : ndarray, shape (h, w, 3)
         BGR uint8 images.
     arrived : float
-        ``time.perf_counter()`` when the pair became available to the session (s).
+        ``time.perf_counter()`` when the pair became available to the session (s): in real
+        time when it arrived, otherwise when the session took it.
     """
 
     index: int
@@ -101,6 +102,8 @@ class FrameFeed:
             self._ready.notify_all()
         if isinstance(item, BaseException):
             raise item
+        if item is not None and not self.realtime:   # no clock: it arrives when taken
+            item = FramePair(item.index, item.left, item.right, time.perf_counter())
         return item
 
     def waiting(self) -> int:

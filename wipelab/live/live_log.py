@@ -21,15 +21,16 @@ Topics (MCAP topic = Rerun entity; time = the session's, seconds from the first 
   imitating, slowing down, learning, ..., wiping);
 * at ``--speed 1`` only, ``/live/latency_ms`` per frame (wall clock: a rerun differs).
 
-Series are buffered and written every :data:`FLUSH_FRAMES` frames; the Rerun stream is
-flushed then too (what a viewer sees is at most that old). Both points depend on the frame
-count only, so a rerun at ``--speed max`` writes the same bytes.
+Series are buffered and written every :data:`STREAM_FRAMES` frames while a viewer watches
+(and the Rerun stream is flushed then: what it shows is at most that old), every
+:data:`FILE_FRAMES` otherwise. Both depend on the frame count only, so a rerun at ``--speed
+max`` writes the same bytes.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 import rerun as rr
@@ -37,32 +38,45 @@ import rerun.blueprint as rrb
 
 from wipelab.logs import StageRecorder, stage_panels, whole_run
 from wipelab.logs.palette import INPUT_COLOUR, LEARNED_COLOUR, REFERENCE_COLOUR, segment_colour
+from wipelab.live.log_worker import LogWorker
 from wipelab.logs.video_encoder import LiveVideoEncoder
 from wipelab.sim.kinematics import quaternion_xyzw_from_rotation
-from wipelab.sim.recording import POSE_RATE_HZ, log_scene, log_trace
+from wipelab.sim.recording import log_scene, log_trace
 from wipelab.stages.track import (AREA_COLOUR, LEFT_FRAME, LOST, QUALITY_COLOURS, RIGHT_FRAME,
                                   TrackScene, log_track_frame, log_track_setup)
+from wipelab.vision.demonstration_area import DemonstrationArea
 from wipelab.vision.tracker import QUALITY_NONE
 
 #: The frame of the tracked positions in a live recording (see the module docstring).
 DEMONSTRATION_FRAME = "demonstration"
-#: Series are written (and the stream flushed) every this many frames.
-FLUSH_FRAMES = 3
-#: The robot's trace is logged in slices of this many control periods (a multiple of the
-#: pose logging stride, so that the slices sample it evenly).
-ROBOT_SLICE_PERIODS = 16
+#: Series are written (and the stream flushed) every this many frames while a viewer
+#: watches, every FILE_FRAMES otherwise.
+STREAM_FRAMES, FILE_FRAMES = 3, 30
+#: The robot's trace is logged in slices of this many control periods while a viewer
+#: watches, of the other many otherwise (multiples of the pose logging stride, so that the
+#: slices sample it evenly; each slice is a chunk per series in the .rrd).
+STREAM_SLICE_PERIODS, FILE_SLICE_PERIODS = 16, 120
+#: Seconds of the person's and the hand's paths shown behind them in the 3D view.
+TRAIL_SECONDS = 2.0
 #: Colour of the robot's hand in the imitation plots.
 ROBOT_COLOUR = (40, 175, 120)
 
 
-def live_blueprint(dofs) -> rrb.Blueprint:
-    """Both cameras with the track drawn; the robot imitating in 3D and what it does; the
-    frequency converging, input vs learned (and the robot's hand) per DOF, height and |F|."""
+def live_blueprint(dofs, target) -> rrb.Blueprint:
+    """Both cameras with the track drawn; the robot imitating in 3D (seen from the front
+    left of ``target`` (3,), m, world: the wiping centre) and what it does; the frequency
+    converging, input vs learned (and the robot's hand) per DOF, height and |F|."""
+    trail = rrb.VisibleTimeRanges(timeline="time",
+                                  start=rrb.TimeRangeBoundary.cursor_relative(-TRAIL_SECONDS),
+                                  end=rrb.TimeRangeBoundary.cursor_relative())
+    target = np.asarray(target, dtype=float)
     scene = rrb.Spatial3DView(
         origin="/", name="the robot imitating; the person's sponge under its hand",
         contents=["+ /**", "- /stereo/**", "- /track/particles/**"],
-        eye_controls=rrb.EyeControls3D(position=[1.6, -1.1, 1.7], look_target=[0.5, -0.2, 0.85],
-                                       eye_up=[0.0, 0.0, 1.0]))
+        eye_controls=rrb.EyeControls3D(position=target + [0.55, -1.0, 0.6],
+                                       look_target=target - [0.1, 0.0, 0.05],
+                                       eye_up=[0.0, 0.0, 1.0]),
+        overrides={"/track/trajectory": trail, "/live/hand_path": trail})
     series = [rrb.TimeSeriesView(origin="/oscillators", name="frequency (Hz)",
                                  axis_x=whole_run(), plot_legend=rrb.PlotLegend("RightTop"))]
     series += [rrb.TimeSeriesView(origin=f"/live/imitation/{dof}",
@@ -105,12 +119,45 @@ class _Series:
             self.t, self.rows = [], []
 
 
+@dataclass(frozen=True)
+class LearnerView:
+    """What the logs show of the learner after a frame (copied: the learner goes on).
+
+    Attributes
+    ----------
+    omega_hz, fundamental_hz, frequency_hz : float
+        The oscillator's frequency, the fundamental and the model's frequency (Hz).
+    output : ndarray, shape (d,)
+        The learned movement now (m, track frame).
+    area : DemonstrationArea or None
+        The demonstration area once the learner has locked (None before).
+    """
+
+    omega_hz: float
+    fundamental_hz: float
+    frequency_hz: float
+    output: np.ndarray
+    area: DemonstrationArea | None
+
+    @classmethod
+    def of(cls, imitation) -> "LearnerView | None":
+        learner = imitation.learner
+        if learner is None:
+            return None
+        return cls(float(learner.oscillators_hz[0]), learner.fundamental_hz,
+                   learner.frequency_hz, learner.output.copy(),
+                   imitation.area if imitation.locked else None)
+
+
 class LiveLog:
-    """Writes a live session into ``rec`` frame by frame (see the module docstring).
+    """Writes a live session into ``rec`` frame by frame (see the module docstring); the
+    work runs on a :class:`~wipelab.live.log_worker.LogWorker` (the methods only hand it
+    over).
 
     Parameters
     ----------
     rec : StageRecorder
+    worker : LogWorker
     scene : TrackScene
         Its frame is :data:`DEMONSTRATION_FRAME`.
     robot : LiveRobot
@@ -118,25 +165,30 @@ class LiveLog:
     fps : float
     latency : bool
         Log the per-frame latency (wall clock; ``--speed 1``).
+    streaming : bool
+        A viewer watches (see the module docstring).
     """
 
-    def __init__(self, rec: StageRecorder, scene: TrackScene, robot, dofs, fps: float,
-                 latency: bool):
-        self.rec, self.scene, self.robot, self.dofs = rec, scene, robot, tuple(dofs)
-        self.fps = float(fps)
+    def __init__(self, rec: StageRecorder, worker: LogWorker, scene: TrackScene, robot, dofs,
+                 fps: float, latency: bool, streaming: bool):
+        self.rec, self.worker, self.scene, self.robot = rec, worker, scene, robot
+        self.dofs, self.fps = tuple(dofs), float(fps)
         width, height = scene.calibration.image_size
         self.encoders = [LiveVideoEncoder((width, height), fps) for _ in range(2)]
         self.frames = 0
+        self.streaming = streaming
+        self.every = STREAM_FRAMES if streaming else FILE_FRAMES
+        self.slice = STREAM_SLICE_PERIODS if streaming else FILE_SLICE_PERIODS
         self.previous: np.ndarray | None = None
         self.quality = None
         self.logged_rows = 0
         self.logged_segments = 0
+        self.hand: np.ndarray | None = None   # the last logged hand position (1, 3)
         self.area_logged = False
         self.heights: list[float] = []        # tracked sponge z (m, track frame)
-        oscillator = (INPUT_COLOUR,)
         self.series = {
             "/track/position": _Series(["x", "y", "z"]),
-            "/oscillators/frequency_hz": _Series(["omega"], np.array(oscillator)),
+            "/oscillators/frequency_hz": _Series(["omega"], np.array([INPUT_COLOUR])),
             "/oscillators/fundamental_hz": _Series(["fundamental"], np.array([REFERENCE_COLOUR])),
             "/oscillators/model_frequency_hz": _Series(["model"], np.array([LEARNED_COLOUR])),
             **{f"/live/imitation/{dof}": _Series(
@@ -145,13 +197,55 @@ class LiveLog:
         }
         if latency:
             self.series["/live/latency_ms"] = _Series(["latency"])
-        log_track_setup(rec, scene)
-        log_scene(rec, robot.task, 0.0)
-        rec.json("/live/placement", 0.0, robot.placement, "wipelab.Placement")
+        worker.submit(self._setup)
 
-    def frame(self, t: float, pair, estimate, imitation, hand_xy) -> None:
+    # -- what the session hands over (in its thread) ------------------------------------------
+    def frame(self, t: float, pair, estimate, learner: LearnerView | None, hand_xy) -> None:
         """One processed frame: the images, the track, the learner, the robot's hand
         ``hand_xy`` (2,) (m, robot world) at the frame's time."""
+        self.worker.submit(self._frame, t, pair, estimate, learner, np.array(hand_xy))
+        self.frames += 1
+        if self.frames % self.every == 0:
+            self.flush()
+
+    def dropped(self, t: float) -> None:
+        """A frame the session never saw (dropped from the frame buffer)."""
+        self.worker.submit(self._dropped, t)
+
+    def latency(self, t: float, seconds: float) -> None:
+        self.worker.submit(self.series["/live/latency_ms"].add, t, [1000.0 * seconds])
+
+    def scene_known(self, R_track_table: np.ndarray, region_size: float) -> None:
+        """The tracker knows the table and the sponge's size: draw the sponge so from now."""
+        self.worker.submit(self._scene_known, np.array(R_track_table), float(region_size))
+
+    def robot_trace(self, final: bool = False) -> None:
+        """Log the robot's control periods since the last call, in slices of ``slice``
+        control periods (all that is left when ``final``), and its new segments."""
+        robot = self.robot
+        start = max(self.logged_rows, robot.first_session_row)
+        count = len(robot.task.session.trace) - start
+        if not final:
+            count -= count % self.slice
+        if count > 0:
+            self.worker.submit(self._robot_slice, start, start + count)
+            self.logged_rows = start + count
+        segments = robot.segments[self.logged_segments:]
+        if segments:
+            self.worker.submit(self._segments, list(segments))
+            self.logged_segments += len(segments)
+
+    def flush(self) -> None:
+        """Write the buffered series and let a viewer see them."""
+        self.worker.submit(self._flush)
+
+    # -- the work (on the worker's thread) ---------------------------------------------------
+    def _setup(self) -> None:
+        log_track_setup(self.rec, self.scene)
+        log_scene(self.rec, self.robot.task, 0.0)
+        self.rec.json("/live/placement", 0.0, self.robot.placement, "wipelab.Placement")
+
+    def _frame(self, t: float, pair, estimate, learner: LearnerView | None, hand_xy) -> None:
         rec, scene = self.rec, self.scene
         for side, encoder, image, frame_id in zip(("left", "right"), self.encoders,
                                                   (pair.left, pair.right),
@@ -169,30 +263,24 @@ class LiveLog:
         if quality != self.quality:
             rec.states("/track/quality", [t], [quality], {quality: QUALITY_COLOURS[quality]})
             self.quality = quality
-        self._learner(t, estimate, imitation, hand_xy)
-        self.frames += 1
-        if self.frames % FLUSH_FRAMES == 0:
-            self.flush()
+        if learner is not None:
+            self._learner(t, estimate, learner, hand_xy)
 
-    def dropped(self, t: float) -> None:
-        """A frame the session never saw (dropped from the frame buffer)."""
+    def _dropped(self, t: float) -> None:
         log_track_frame(self.rec, self.scene, -1, t, np.full(4, np.nan), QUALITY_NONE,
                         np.zeros((0, 3)), None)
         self.previous = None
 
-    def latency(self, t: float, seconds: float) -> None:
-        self.series["/live/latency_ms"].add(t, [1000.0 * seconds])
+    def _scene_known(self, R_track_table: np.ndarray, region_size: float) -> None:
+        self.scene = replace(self.scene, R_track_table=R_track_table, region_size=region_size)
 
-    def _learner(self, t: float, estimate, imitation, hand_xy) -> None:
-        learner = imitation.learner
-        if learner is None:
-            return
-        self.series["/oscillators/frequency_hz"].add(t, learner.oscillators_hz[:1])
+    def _learner(self, t: float, estimate, learner: LearnerView, hand_xy) -> None:
+        self.series["/oscillators/frequency_hz"].add(t, [learner.omega_hz])
         self.series["/oscillators/fundamental_hz"].add(t, [learner.fundamental_hz])
         self.series["/oscillators/model_frequency_hz"].add(t, [learner.frequency_hz])
-        if not imitation.locked:
+        area = learner.area
+        if area is None:
             return
-        area = imitation.area
         if not self.area_logged:
             self._area(t, area)
         shown = area.normalise(np.stack([
@@ -201,7 +289,7 @@ class LiveLog:
         for j, dof in enumerate(self.dofs):
             self.series[f"/live/imitation/{dof}"].add(t, shown[:, j])
 
-    def _area(self, t: float, area) -> None:
+    def _area(self, t: float, area: DemonstrationArea) -> None:
         """The demonstration area (once frozen) and where the demonstration goes in the
         robot's world."""
         self.area_logged = True
@@ -221,28 +309,23 @@ class LiveLog:
         rec.transforms(t, [("world", DEMONSTRATION_FRAME, translation,
                             quaternion_xyzw_from_rotation(rotation))])
 
-    def robot_trace(self, final: bool = False) -> None:
-        """Log the robot's control periods since the last call, in slices of
-        :data:`ROBOT_SLICE_PERIODS` (all that is left when ``final``), and its new segments."""
-        robot, rec = self.robot, self.rec
-        rows = robot.task.session.trace.rows
-        start = max(self.logged_rows, robot.first_session_row)
-        count = len(rows) - start
-        if not final:
-            count -= count % ROBOT_SLICE_PERIODS
-        if count > 0:
-            trace = robot.trace_arrays(start, start + count)
-            log_trace(rec, "live", robot.task, trace)
-            self.logged_rows = start + count
-        for segment in robot.segments[self.logged_segments:]:
-            time = max(segment.start, 0.0)
-            rec.states("/live/segment", [time], [segment.name],
-                       {segment.name: segment_colour(segment.name)})
-            rec.events("/live/events", [time], [segment.name])
-        self.logged_segments = len(robot.segments)
+    def _robot_slice(self, start: int, stop: int) -> None:
+        trace = self.robot.trace_arrays(start, stop)
+        log_trace(self.rec, "live", self.robot.task, trace)
+        path = trace["tcp"] if self.hand is None else np.vstack([self.hand, trace["tcp"]])
+        self.rec.line_strip3d("/live/hand_path", float(trace["t"][-1]), path,
+                              color=ROBOT_COLOUR, entity_id=f"/live/hand_path/{start}")
+        self.hand = trace["tcp"][-1:]
 
-    def flush(self) -> None:
-        """Write the buffered series and let a viewer see them."""
+    def _segments(self, segments) -> None:
+        for segment in segments:
+            time = max(segment.start, 0.0)
+            self.rec.states("/live/segment", [time], [segment.name],
+                            {segment.name: segment_colour(segment.name)})
+            self.rec.events("/live/events", [time], [segment.name])
+
+    def _flush(self) -> None:
         for topic, series in self.series.items():
             series.write(self.rec, topic)
-        self.rec.rerun.flush(timeout_sec=0.0)
+        if self.streaming:
+            self.rec.rerun.flush(timeout_sec=0.0)

@@ -60,7 +60,7 @@ class RobotParams:
 
     surface: str = "flat"                 # [--surface] built-in name or TOML file
     reach_radius: float = 0.15            # m: the movement the robot is placed for
-    blend_seconds: float = 0.5            # s: from the waiting pose into the imitation
+    blend_seconds: float = 0.3            # s: from the waiting pose into the imitation
     adaptation: AdaptationParams = field(default_factory=AdaptationParams)
     kernels: int = 50                     # kernels of the adapted model (as adapt's)
     replay_scale: float = 1.0             # [--replay-scale] x the demonstrated tempo
@@ -152,12 +152,18 @@ class LiveRobot:
         self.replay_run: RunResult | None = None
         self.stop_reason: str | None = None
         self.model: PeriodicModel | None = None     # the placed learned model (finish)
+        self.adapt_task: WipingTask | None = None   # the task retargeted to it
         self.adapted: PeriodicModel | None = None
         self._following: Following | None = None
         self._mapping: tuple[np.ndarray, float] | None = None   # area centre, scale
         self._imitation_start = math.nan
         self._program = self._run()
         self.done = False
+
+    @property
+    def scale(self) -> float | None:
+        """How the demonstration was scaled into the robot's reach (None before imitating)."""
+        return None if self._mapping is None else self._mapping[1]
 
     @property
     def time(self) -> float:
@@ -279,7 +285,7 @@ class LiveRobot:
                               IMITATE)
 
     def _adapt_and_wipe(self):
-        task = retarget_task(self.task, self.model)
+        task = self.adapt_task = retarget_task(self.task, self.model)
         params = self.params.adaptation
         omega, slow = self.model.omega, self.model.omega / params.slowdown
         path = PathGenerator(self.model, ("x", "y"), phase=self._finish_phase)

@@ -3,7 +3,9 @@
 :class:`Adaptation` drives a :class:`~wipelab.sim.task.WipingTask` through:
 
 1. approach: the hand goes above the start of the path, identifies its payload (F/T gravity
-   compensation) and moves down to the start height;
+   compensation) and moves down to the start height (skipped with ``start_phase``: the hand
+   is already moving along the path at the start height, calibrated, as at the end of
+   ``wipelab live``'s imitation);
 2. online learning (the paper, Sec. II-B, III-B2): the x-y path runs slowed down (Omega
    divided by ``slowdown``) with active compliance in z (eqs. 9-12); the commanded height Y
    (eq. 10) is learned into a new DOF z of the DMP, anchored to the x-y phase (eqs. 13-15),
@@ -94,6 +96,9 @@ class Adaptation:
     model : PeriodicModel
         The placed x-y model (its ``frequency_hz`` is the demonstrated tempo).
     params : AdaptationParams
+    start_phase : float, optional
+        The phase (rad) at which the hand is on the path at the start height, the payload
+        identified: step 1 is skipped and learning starts there.
 
     Attributes
     ----------
@@ -114,8 +119,10 @@ class Adaptation:
         Set by a safety stop.
     """
 
-    def __init__(self, task: WipingTask, model: PeriodicModel, params: AdaptationParams):
+    def __init__(self, task: WipingTask, model: PeriodicModel, params: AdaptationParams,
+                 start_phase: float | None = None):
         self.task, self.model, self.params = task, model, params
+        self.start_phase = start_phase
         session = task.session
         self.learning_omega = model.omega / params.slowdown
         self.learner = ForceProfileLearner(model.kernels, model.width, model.alpha_s,
@@ -173,7 +180,9 @@ class Adaptation:
 
     def _approach(self):
         session, task = self.task.session, self.task
-        self._path = PathGenerator(self.model, ("x", "y"), phase=0.0)
+        self._path = PathGenerator(self.model, ("x", "y"), phase=self.start_phase or 0.0)
+        if self.start_phase is not None:
+            return
         start = np.array([*self._path.position, task.start_height])
         yield from session.moving_to(start + [0.0, 0.0, CALIBRATION_LIFT], 1.5, mode=MOVE)
         yield from session.calibrating()
@@ -190,7 +199,7 @@ class Adaptation:
         self.segments.append(Segment("learning", LEARN, session.time))
         task.world.set_tool_speed(path.max_speed(omega))
         reference = None   # Y_r: the start height, or (reference "learned") the profile so far
-        period_end = 2.0 * math.pi
+        period_end = path.phase + 2.0 * math.pi
         while self.monitor.periods_ < self.params.periods and not self.monitor.converged:
             xy, velocity = path.step(omega, dt)
             z = ((task.start_height, 0.0) if reference is None else

@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 import rerun as rr
@@ -200,7 +201,8 @@ def _transform(pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return pose[:3, 3], quaternion_xyzw_from_rotation(pose[:3, :3])
 
 
-def _log_static_scene(rec: StageRecorder, task, t0: float) -> None:
+def log_scene(rec: StageRecorder, task, t0: float) -> None:
+    """What does not move: the robot (URDF, fixed and held joints), the sponge, the surface."""
     urdf_path = armar3b_urdf_path()
     urdf_text = urdf_path.read_text()
     rec.attach("armar3b.urdf", urdf_path.read_bytes(), "application/xml")
@@ -252,10 +254,16 @@ def _with_gaps(t: np.ndarray, values: np.ndarray, gaps) -> tuple[np.ndarray, np.
             np.insert(values, at, nan_row, axis=0))
 
 
+@lru_cache(maxsize=1)
+def _robot_joints() -> dict:
+    """The shipped URDF's joints (parsed once: ``wipelab live`` logs its trace in slices)."""
+    return parse_urdf_joints(armar3b_urdf_path().read_text())
+
+
 def _log_poses(rec: StageRecorder, stage: str, task, trace: dict) -> None:
     """The 3D scene at :data:`POSE_RATE_HZ`: /tf of the moving joints and the sponge, the TCP
     poses and the force arrow, each as one series."""
-    urdf_joints = parse_urdf_joints(armar3b_urdf_path().read_text())
+    urdf_joints = _robot_joints()
     pick = _samples(task, trace, POSE_RATE_HZ)
     t = trace["t"][pick]
     frames = []
@@ -420,19 +428,26 @@ def log_run(rec: StageRecorder, stage: str, task, trace: dict, segments, profile
     of a replay."""
     t0 = float(trace["t"][0])
     gaps = _gaps(task, trace["t"])
-    _log_static_scene(rec, task, t0)
+    log_scene(rec, task, t0)
     if model is not None:
         path = dof_waveform(model, ("x", "y"), PATH_PHASES)
         z = task.start_height if "z" not in model.dofs else dof_waveform(model, ("z",))[:, 0]
         rec.line_strip3d(f"/{stage}/path", t0, np.column_stack([path, np.broadcast_to(
             z, len(path))]), color=(255, 255, 255))
-    _log_series(rec, stage, task, trace, gaps)
+    log_trace(rec, stage, task, trace, gaps)
     _log_segments(rec, stage, trace, segments, gaps)
-    _log_poses(rec, stage, task, trace)
     if profiles:
         _log_profiles(rec, task, trace, model, profiles)
     if runs:
         _log_force_by_phase(rec, trace, runs, task.options.compliance.target_force)
+
+
+def log_trace(rec: StageRecorder, stage: str, task, trace: dict, gaps=()) -> None:
+    """The controller's series and the 3D scene of ``trace`` (arrays, a whole run or a slice
+    of one whose length is a multiple of the pose stride: ``wipelab live`` logs its run as it
+    goes); ``gaps`` (start, end) s where the trace has no rows."""
+    _log_series(rec, stage, task, trace, list(gaps))
+    _log_poses(rec, stage, task, trace)
 
 
 def log_placement(rec: StageRecorder, stage: str, t: float, placement: dict) -> None:

@@ -183,17 +183,38 @@ def plan_task(model: PeriodicModel, surface: Surface, options: TaskOptions,
                               "it down")
         raise InputError(f"{source}: {problem}")
     posture, tracker = fallback
+    return TaskPlan(model, surface, options, arm, posture, tracker, path_xy,
+                    _max_frequency(model, surface, options, posture, tracker))
+
+
+def _max_frequency(model: PeriodicModel, surface: Surface, options: TaskOptions,
+                   posture: TaskPosture, tracker: ArmIK) -> float:
+    """The fastest tempo (Hz) at which the arm in ``posture`` follows the placed path of
+    ``model`` (its joint speeds at every SPEED_CHECK_STRIDE-th path phase)."""
     check = slice(0, None, SPEED_CHECK_STRIDE)
     dofs = ("x", "y", "z") if "z" in model.dofs else ("x", "y")
-    points = np.column_stack([path_xy, nominal])[check]
+    path_xy = dof_waveform(model, ("x", "y"), PATH_PHASES[check])
+    points = np.column_stack([path_xy, surface.height_at(path_xy) + NOMINAL_TOOL_DROP])
     velocities = np.zeros((len(points), 3))
     velocities[:, :len(dofs)] = dof_waveform(model, dofs, PATH_PHASES[check], derivative=1)
     if "z" in model.dofs:
         points[:, 2] = dof_waveform(model, ("z",), PATH_PHASES[check])[:, 0]
     max_omega = phase_rate_limit(tracker, posture, points, velocities,
                                  joint_speed_limit(options))
-    return TaskPlan(model, surface, options, arm, posture, tracker, path_xy,
-                    max_omega / (2.0 * math.pi))
+    return max_omega / (2.0 * math.pi)
+
+
+def retarget_task(task: WipingTask, model: PeriodicModel) -> WipingTask:
+    """The same robot, world and session for another (placed) path ``model``: the path and
+    how fast the arm can follow it are the new model's; the posture and the start height
+    stay (the robot did not move; ``wipelab live`` places it for a movement the
+    demonstration was then scaled into)."""
+    path_xy = dof_waveform(model, ("x", "y"))
+    if np.any(np.isnan(task.surface.height_at(path_xy))):
+        raise InputError(f"the learned path leaves the surface {task.surface.name!r}")
+    return replace(task, model=model, path_xy=path_xy,
+                   max_frequency_hz=_max_frequency(model, task.surface, task.options,
+                                                   task.posture, task.session.tracker))
 
 
 def joint_speed_limit(options: TaskOptions) -> float:

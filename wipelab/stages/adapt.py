@@ -99,8 +99,10 @@ def _window(trace: dict, start: float, end: float) -> np.ndarray:
     return (trace["t"] > start) & (trace["t"] <= end)
 
 
-def _metrics(task: WipingTask, run: Adaptation, trace: dict, adapted, params: AdaptParams
-             ) -> dict:
+def adapt_metrics(task: WipingTask, run: Adaptation, trace: dict, adapted, params: AdaptParams
+                  ) -> dict:
+    """metrics.json of an adaptation ``run`` on ``task`` (``trace``: the session's trace as
+    arrays; ``adapted``: its adapted model; ``params``: force, feedback and tolerance)."""
     f0 = params.force
     learning_hz = run.learning_omega / (2.0 * math.pi)
     learning_start = run.segments[1].start if len(run.segments) > 1 else math.inf
@@ -188,7 +190,7 @@ def run_adapt(model_path: str | os.PathLike, out_dir: str | os.PathLike,
                          "tempos_hz": sorted(run.heights),
                          "target_force_n": params.force, "feedback": params.feedback}
         adapted = run.adapted_model(source, surface_entry)
-        metrics = _metrics(task, run, trace, adapted, params)
+        metrics = adapt_metrics(task, run, trace, adapted, params)
         metrics["placement"] = placement.record
         metrics["kernels"] = {"model": model.kernels, "adapted": adapted.kernels,
                               "xy_refit_error_m": refit_error(as_learned, refitted, ("x", "y"))}

@@ -40,7 +40,8 @@ from wipelab.errors import InputError
 from wipelab.live.following import following_metrics
 from wipelab.live.frames import FrameFeed, camera_pairs, demo_feed, is_stream, open_capture
 from wipelab.live.imitation import Imitation, ImitationParams
-from wipelab.live.live_log import DEMONSTRATION_FRAME, LiveLog, live_blueprint
+from wipelab.live.live_log import DEMONSTRATION_FRAME, LearnerView, LiveLog, live_blueprint
+from wipelab.live.log_worker import LogWorker
 from wipelab.live.robot import Following, LiveRobot, RobotParams
 from wipelab.live.stop_requests import StopRequests
 from wipelab.live.timing import FrameTimes, SessionClock
@@ -173,14 +174,15 @@ def run_live(source: LiveSource, out_dir: str | os.PathLike, params: LiveParams 
                                                 "colour_source": colour.option}
         with staged_output(out_dir) as tmp:
             with StageRecorder(tmp, "live", parameters, opened.inputs,
-                               live_blueprint(params.imitation.dofs),
+                               live_blueprint(params.imitation.dofs, robot.waiting),
                                {"calibration.yaml": opened.calibration_path}, sinks) as rec, \
-                    StopRequests(stdin=listen_stdin) as requests:
+                    LogWorker() as worker, StopRequests(stdin=listen_stdin) as requests:
                 scene = TrackScene(opened.calibration, DEMONSTRATION_FRAME, np.eye(3),
                                    None if sponge is None else
                                    (sponge.length, sponge.width, sponge.height), math.nan)
-                session = _Session(opened.feed, tracker, robot, params, scene, rec, requests,
-                                   quiet)
+                log = LiveLog(rec, worker, scene, robot, params.imitation.dofs, opened.feed.fps,
+                              params.realtime, streaming=params.viewer != "none")
+                session = _Session(opened.feed, tracker, robot, params, log, requests, quiet)
                 session.run(source)
             metrics = session.outputs(tmp, source, parameters, opened.inputs)
     finally:
@@ -193,13 +195,12 @@ class _Session:
     """The frame loop and what it records (see the module docstring)."""
 
     def __init__(self, feed: FrameFeed, tracker: SpongeTracker, robot: LiveRobot,
-                 params: LiveParams, scene: TrackScene, rec: StageRecorder,
-                 requests: StopRequests, quiet: bool):
+                 params: LiveParams, log: LiveLog, requests: StopRequests, quiet: bool):
         self.feed, self.tracker, self.robot, self.params = feed, tracker, robot, params
         self.fps = feed.fps
         self.imitation = Imitation(self.fps, params.imitation)
-        self.log = LiveLog(rec, scene, robot, params.imitation.dofs, self.fps, params.realtime)
-        self.requests, self.quiet = requests, quiet
+        self.log, self.requests, self.quiet = log, requests, quiet
+        self.scene_known = False
         self.times = FrameTimes()
         self.rows: list[tuple] = []       # per frame: pose (4,), valid, quality
         self.hand: list[np.ndarray] = []  # per frame: the robot's hand x-y (m, world)
@@ -236,15 +237,16 @@ class _Session:
             self._advance(index, np.full(4, np.nan), False, "")
             self.log.dropped(index / self.fps)
         estimate = self.tracker.step(pair.left, pair.right)
-        if self.tracker.ready and not np.isfinite(self.log.scene.region_size):
-            self._scene_known()
+        if self.tracker.ready and not self.scene_known:
+            self.scene_known = True   # draw the sponge at its size and turn from now
+            self.log.scene_known(tracked_table_axes(self.tracker), self.tracker.region.size)
         self._advance(pair.index, estimate.pose, estimate.valid, estimate.quality)
         commanded = time.perf_counter()
         self.times.add(pair.arrived, commanded, late)
         t = pair.index / self.fps
         if self.params.realtime:
             self.log.latency(t, commanded - pair.arrived)
-        self.log.frame(t, pair, estimate, self.imitation, self.hand[-1])
+        self.log.frame(t, pair, estimate, LearnerView.of(self.imitation), self.hand[-1])
         self.log.robot_trace()
 
     def _advance(self, index: int, pose: np.ndarray, valid: bool, quality: str) -> None:
@@ -262,13 +264,6 @@ class _Session:
         robot.advance(t + 1.0 / self.fps)
         self.rows.append((np.asarray(pose, dtype=float), bool(valid), quality))
         self.hand.append(np.asarray(robot.task.session.trace.last("tcp")[:2], dtype=float))
-
-    def _scene_known(self) -> None:
-        """The tracker has found the sponge and its plane: draw it at its size and turn."""
-        from dataclasses import replace
-
-        self.log.scene = replace(self.log.scene, R_track_table=tracked_table_axes(self.tracker),
-                                 region_size=float(self.tracker.region.size))
 
     def _never_locked(self, source: LiveSource) -> None:
         tracked = sum(valid for _, valid, _ in self.rows)
@@ -297,11 +292,10 @@ class _Session:
             t += step
             self.clock.wait_until(t)
             frames += 1
-            if frames % 4 == 0:
-                self.log.robot_trace()
-            if frames % 15 == 0:
+            self.log.robot_trace()
+            if frames % self.log.every == 0:
                 self.log.flush()
-                bar.update(15 * step)
+                bar.update(self.log.every * step)
         self.log.robot_trace(final=True)
         self.log.flush()
         self.wall_s = self.clock.elapsed()

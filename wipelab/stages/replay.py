@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Generator
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -131,16 +132,19 @@ def _adapted_pose(model: PeriodicModel, source: str) -> tuple[BasePose, float | 
     return BasePose(x, y, yaw), hip
 
 
-def _lower_onto(task: WipingTask, xy: np.ndarray, z: float, label: int) -> None:
+def _lowering_onto(task: WipingTask, xy: np.ndarray, z: float, label: int):
     session = task.session
-    session.move_to([*xy, task.start_height + 0.03], 0.8, mode=MOVE)
+    yield from session.moving_to([*xy, task.start_height + 0.03], 0.8, mode=MOVE)
     if z < task.start_height + 0.03:
-        session.move_to([*xy, z], 0.6, mode=label)
+        yield from session.moving_to([*xy, z], 0.6, mode=label)
 
 
-def _run_one(task: WipingTask, model: PeriodicModel, scale: float, mode: str, label: int,
-             params: ReplayParams, z_plane: float, bar) -> RunResult:
-    """One run of the model's x, y and, if adapted, its z for the run's tempo, from phase 0."""
+def run_steps(task: WipingTask, model: PeriodicModel, scale: float, mode: str, label: int,
+              params: ReplayParams, z_plane: float) -> Generator[bool, None, RunResult]:
+    """One run of the model's x, y and, if adapted, its z for the run's tempo, from phase 0,
+    one control period per iteration (True while it wipes, None while the hand moves to and
+    from the surface; ``wipelab live`` runs it on its clock); returns its
+    :class:`RunResult`."""
     session = task.session
     dt = session.dt
     requested = scale * model.frequency_hz
@@ -158,7 +162,7 @@ def _run_one(task: WipingTask, model: PeriodicModel, scale: float, mode: str, la
     motion_start = score_from = math.inf
     stop = None
     try:
-        _lower_onto(task, start[:2], start[2] if learned else reference, label)
+        yield from _lowering_onto(task, start[:2], start[2] if learned else reference, label)
         session.integrator.offset_ = 0.0
         task.world.set_tool_speed(path.max_speed(omega))
         motion_start = session.time
@@ -169,7 +173,7 @@ def _run_one(task: WipingTask, model: PeriodicModel, scale: float, mode: str, la
             vz = velocity[2] if learned else 0.0   # z_r moves?
             session.tick(position[:2], z_ref, compliance_on, path.phase,
                          velocity=np.array([velocity[0], velocity[1], vz]), mode=label)
-            bar.update()
+            yield True
     except SafetyStop as error:
         stop = str(error)
         motion_start = min(motion_start, session.time)
@@ -177,12 +181,12 @@ def _run_one(task: WipingTask, model: PeriodicModel, scale: float, mode: str, la
     session.integrator.offset_ = 0.0
     if stop is None:
         tcp = session.trace.last("tcp_cmd")
-        session.move_to([tcp[0], tcp[1], task.start_height + 0.03], 0.5, mode=MOVE)
+        yield from session.moving_to([tcp[0], tcp[1], task.start_height + 0.03], 0.5, mode=MOVE)
     return RunResult(scale, mode, requested, frequency, motion_start, score_from, end, planned,
                      stop)
 
 
-def _run_metrics(task: WipingTask, trace: dict, run: RunResult, target_force: float) -> dict:
+def run_metrics(task: WipingTask, trace: dict, run: RunResult, target_force: float) -> dict:
     """Metrics of the run's scored window (:meth:`RunResult.scored`)."""
     start, end = run.scored()
     window = (trace["t"] > start) & (trace["t"] <= end)
@@ -261,7 +265,14 @@ def run_replay(model_path: str | os.PathLike, out_dir: str | os.PathLike,
                     hz = task.executable_frequency(scale * model.frequency_hz)
                     segments.append(Segment(f"{speed_label(scale, hz)} {mode}", label,
                                             session.time))
-                    runs.append(_run_one(task, model, scale, mode, label, params, z_plane, bar))
+                    periods = run_steps(task, model, scale, mode, label, params, z_plane)
+                    while True:
+                        try:
+                            wiping = next(periods)
+                        except StopIteration as done:
+                            runs.append(done.value)
+                            break
+                        bar.update(bool(wiping))
         segments.append(Segment("end", MOVE, session.time))
         trace = session.trace.arrays()
         metrics = {"format": "wipelab.replay_metrics/1", "surface": surface.describe(),
@@ -272,7 +283,7 @@ def run_replay(model_path: str | os.PathLike, out_dir: str | os.PathLike,
                    "feedback": feedback, "periods": params.periods, "scales": {}}
         for run in runs:
             metrics["scales"].setdefault(f"{run.scale:g}", {})[run.mode] = \
-                _run_metrics(task, trace, run, force)
+                run_metrics(task, trace, run, force)
         metrics["sim_time_s"] = float(trace["t"][-1])
         inputs = {"model": model_path}
         if Path(surface_spec).suffix.lower() == ".toml":

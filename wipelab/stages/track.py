@@ -180,7 +180,7 @@ def open_demo(demo_dir: str | os.PathLike) -> Demo:
     return Demo(left, right, calibration_path, calibration, reader, metadata)
 
 
-def _colour_source(params: TrackParams, metadata: dict, toml_name: str) -> ColourSource:
+def colour_source(params: TrackParams, metadata: dict, toml_name: str) -> ColourSource:
     given = [v is not None for v in (params.colour, params.hsv, params.roi)]
     if sum(given) > 1:
         raise InputError("--color, --hsv and --roi: give only one of them")
@@ -200,7 +200,7 @@ def _colour_source(params: TrackParams, metadata: dict, toml_name: str) -> Colou
         raise InputError(f"{option}: {error}") from None
 
 
-def _sponge(params: TrackParams, metadata: dict, toml_name: str) -> SpongeBox | None:
+def sponge_box(params: TrackParams, metadata: dict, toml_name: str) -> SpongeBox | None:
     size = params.sponge_size or metadata.get("sponge_size")
     if size is None:
         return None
@@ -226,7 +226,7 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
     """
     demo = open_demo(demo_dir)
     toml_name = str(Path(demo_dir) / "demo.toml")
-    colour = _colour_source(params, demo.metadata, toml_name)
+    colour = colour_source(params, demo.metadata, toml_name)
     if colour.roi is not None:
         x, y, w, h = colour.roi
         width, height = demo.calibration.image_size
@@ -234,7 +234,7 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
             raise InputError(f"--roi: region {x},{y},{w},{h} does not fit in the "
                              f"{width}x{height} frames")
     tracker_params = TrackerParams(particles=params.particles, seed=params.seed,
-                                   sponge=_sponge(params, demo.metadata, toml_name))
+                                   sponge=sponge_box(params, demo.metadata, toml_name))
     tracker = SpongeTracker(demo.calibration, colour, tracker_params)
     result = run_tracker(tracker, demo.reader, params, quiet)
     if result is None and not tracker.region.frames_with_candidates:
@@ -250,11 +250,13 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
     inputs = {"left_video": demo.left, "right_video": demo.right,
               "calibration": demo.calibration_path}
     scene = TrackScene(demo.calibration, "world" if result.frame == "world" else LEFT_FRAME,
-                       _table_axes(tracker), result.sponge_size, result.region_size)
+                       tracked_table_axes(tracker), result.sponge_size, result.region_size)
     blueprint = track_blueprint(scene, result.area,
                                 float(np.nanmean(result.poses[result.valid, 2])))
     with staged_output(out_dir) as tmp:
-        write_trajectory(tmp / "track.csv", result.t, _csv_columns(result))
+        write_trajectory(tmp / "track.csv", result.t,
+                         tracked_csv_columns(result.poses, result.valid, result.quality,
+                                             result.normalised))
         with StageRecorder(tmp, "track", parameters, inputs, blueprint,
                            attachments={"calibration.yaml": demo.calibration_path}) as rec:
             log_track(rec, demo, result, scene, quiet)
@@ -316,11 +318,13 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
                        float(tracker.region.size))
 
 
-def _csv_columns(result: TrackResult) -> dict[str, np.ndarray]:
-    p = result.poses
-    return {"x": p[:, 0], "y": p[:, 1], "z": p[:, 2], "valid": result.valid.astype(int),
-            "quality": result.quality, "yaw": p[:, 3], "x_norm": result.normalised[:, 0],
-            "y_norm": result.normalised[:, 1]}
+def tracked_csv_columns(poses: np.ndarray, valid: np.ndarray, quality: np.ndarray,
+                        normalised: np.ndarray) -> dict[str, np.ndarray]:
+    """track.csv's columns after t (see the module docstring) from poses (n, 4), valid (n,),
+    quality (n,) and normalised offsets (n, 2)."""
+    return {"x": poses[:, 0], "y": poses[:, 1], "z": poses[:, 2], "valid": valid.astype(int),
+            "quality": quality, "yaw": poses[:, 3], "x_norm": normalised[:, 0],
+            "y_norm": normalised[:, 1]}
 
 
 #: Colours of the logs: sponge box, particles, trajectory, demonstration area.
@@ -403,7 +407,7 @@ class TrackScene:
         return camera.project(points_track @ T[:3, :3].T + T[:3, 3]) + 0.5
 
 
-def _table_axes(tracker: SpongeTracker) -> np.ndarray:
+def tracked_table_axes(tracker: SpongeTracker) -> np.ndarray:
     """Axes (3, 3) of the table in the track frame, as the tracker measures yaw (identity
     before the plane the sponge moves in is known)."""
     plane = tracker.region.sponge_plane()
@@ -489,8 +493,8 @@ def log_track_setup(rec: StageRecorder, scene: TrackScene) -> None:
     T_track_left = calibration.T_track_left
     T_track_right = T_track_left @ invert_transform(calibration.right.T_cam_ref)
     tf = [(scene.frame, RIGHT_FRAME, T_track_right[:3, 3], _quaternion_xyzw(T_track_right[:3, :3]))]
-    if scene.frame == "world":
-        tf.insert(0, ("world", LEFT_FRAME, T_track_left[:3, 3],
+    if scene.frame != LEFT_FRAME:   # the world (of the demo) with the cameras in it
+        tf.insert(0, (scene.frame, LEFT_FRAME, T_track_left[:3, 3],
                       _quaternion_xyzw(T_track_left[:3, :3])))
     rec.transforms(0.0, tf)
     for side, K, D, frame_id in (("left", calibration.K1, calibration.D1, LEFT_FRAME),
