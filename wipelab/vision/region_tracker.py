@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import cv2
@@ -188,6 +189,11 @@ class _View:
         return np.column_stack([xy, np.ones(len(xy))])
 
 
+#: Frames after which a table measurement of a tracked frame (run on a worker thread) is
+#: taken up.
+TABLE_DELAY_FRAMES = 30
+
+
 class RegionTracker:
     """Tracks the sponge's colour region in both cameras and places it on the table plane.
 
@@ -224,6 +230,9 @@ class RegionTracker:
         self.size: float | None = None
         self.table: Plane | None = None
         self._table_points: list[np.ndarray] = []  # dense stereo points of the table pairs
+        # table measurements running on a worker: (frame at which they are taken up, job)
+        self._table_jobs: deque[tuple[int, Future]] = deque()
+        self._table_worker: ThreadPoolExecutor | None = None
         self._table_centre: np.ndarray | None = None
         self.ray_offsets: deque[np.ndarray] = deque(maxlen=90)
         self.ray_changes: deque[float] = deque(maxlen=120)  # of accepted frames, / size
@@ -255,6 +264,7 @@ class RegionTracker:
     def restart(self) -> None:
         """Forget the track but keep what was learnt about the sponge and the scene (for a
         second pass over the same video from its start)."""
+        self._take_up_tables(every=True)
         self.frame = -1
         self.history.clear()
         self.failures = self.params.coast_frames + 1
@@ -265,6 +275,7 @@ class RegionTracker:
         """Take this frame's sponge point (3,), left optical frame, from elsewhere (the box
         refinement) instead of measuring it: keeps the prediction going."""
         self.frame += 1
+        self._take_up_tables()
         point = np.asarray(point, dtype=np.float64).copy()
         self.history.append((self.frame, point))
         self._last_seen = point
@@ -274,6 +285,7 @@ class RegionTracker:
     def step(self, left: np.ndarray, right: np.ndarray) -> RegionEstimate:
         """Process the next synchronised frame pair (BGR uint8)."""
         self.frame += 1
+        self._take_up_tables()
         frames = (left, right)
         if not self.identified:
             if self.model is None and not self._seed_colour(frames):
@@ -587,6 +599,32 @@ class RegionTracker:
             self.table = table
             self._refresh_plane(force=True)
 
+    def _measure_table_later(self, frames) -> None:
+        """:meth:`_measure_table` on a worker thread (dense stereo and the plane fit take
+        0.05-1 s, many frames of a live session), taken up :data:`TABLE_DELAY_FRAMES` frames
+        later, waiting for it then: the same frame on every run, however fast the machine."""
+        if self._table_worker is None:
+            self._table_worker = ThreadPoolExecutor(1, thread_name_prefix="wipelab-table")
+        job = self._table_worker.submit(self._table_fit, frames, list(self._table_points),
+                                        self._table_centre.copy())
+        self._table_jobs.append((self.frame + TABLE_DELAY_FRAMES, job))
+
+    def _table_fit(self, frames, earlier: list[np.ndarray], centre: np.ndarray
+                   ) -> tuple[np.ndarray, Plane | None]:
+        points = self.table_stereo.table_points(*frames, centre)
+        return points, self.table_stereo.plane_of_points(
+            np.concatenate(earlier + [points]), centre, self.params.table_radius,
+            prior_normal=self.world_up)
+
+    def _take_up_tables(self, every: bool = False) -> None:
+        """The table measurements that are due (``every``: all of them)."""
+        while self._table_jobs and (every or self._table_jobs[0][0] <= self.frame):
+            points, table = self._table_jobs.popleft()[1].result()
+            self._table_points.append(points)
+            if table is not None:
+                self.table = table
+                self._refresh_plane(force=True)
+
     def sponge_plane(self) -> Plane | None:
         """The plane the tracked point moves in (None before the first measurement): the
         table's, at the median height of the sponge's stereo points above it."""
@@ -695,8 +733,9 @@ class RegionTracker:
             self._stereo_points.append(stereo)
             self._refresh_plane()
         p = self.params
-        if len(self._table_points) < p.table_pairs and self.valid_count % p.table_every == 0:
-            self._measure_table(frames)
+        if len(self._table_points) + len(self._table_jobs) < p.table_pairs and \
+                self.valid_count % p.table_every == 0:
+            self._measure_table_later(frames)
         plane = self.sponge_plane()
         if plane is not None and len(good) == 2:
             self.ray_offsets.append(self._ray_offset(plane, rays))
