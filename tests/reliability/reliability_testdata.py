@@ -26,7 +26,8 @@ from wipelab.pipeline.cache import DigestMemo, read_record, write_record
 WIPELAB = [sys.executable, "-c", "from wipelab.cli import main; main()"]
 
 #: stage -> (output it writes, command line that makes it). Short and small: a 5 s demo
-#: (7.5 periods at 1.5 Hz), 2 adapt periods slowed down 6 times, one replay period per scale.
+#: (7.5 periods at 1.5 Hz), 2 adapt periods slowed down 6 times, one replay period per scale;
+#: the same demo live, as fast as it goes.
 STAGE_RUNS: dict[str, tuple[str, list[str]]] = {
     "synth": ("demo", ["synth", "demo", "--duration", "5", "--frequency", "1.5", "--seed", "1"]),
     "track": ("track", ["track", "demo", "-o", "track", "--particles", "60"]),
@@ -36,6 +37,7 @@ STAGE_RUNS: dict[str, tuple[str, list[str]]] = {
     "replay": ("replay", ["replay", "adapt/adapted_model.json", "-o", "replay",
                           "--frequency-scale", "1", "2", "--mode", "learned+compliance",
                           "--periods", "1", "--warmup-periods", "0"]),
+    "live": ("live", ["live", "demo", "-o", "live", "--speed", "max", "--replay-periods", "1"]),
 }
 
 #: learn -> rollout on the tracked demo: the run directory `report` and `view` read (the

@@ -22,7 +22,7 @@ from reliability_testdata import STAGE_RUNS, WIPELAB, leftovers, output_files, u
 
 #: What each command reads: folders of the artefacts, linked under the same name.
 INPUTS = {"synth": [], "track": ["demo"], "learn": ["track"], "adapt": ["learn"],
-          "replay": ["adapt"]}
+          "replay": ["adapt"], "live": ["demo"]}
 
 
 def start(argv: list[str], cwd: Path, stderr_file: Path) -> subprocess.Popen:

@@ -105,6 +105,8 @@ def live(source: Path | None, out_dir: Path, cameras: str | None, calibration: P
                           adaptation=AdaptationParams(slowdown=slowdown)))
     live_source = LiveSource(demo=source, cameras=pair, calibration=calibration)
     metrics = run_live(live_source, out_dir, params, quiet=quiet)
+    if metrics["safety_stop"]:
+        click.echo(f"warning: safety stop: {metrics['safety_stop']}", err=True)
     if quiet:
         return
     timing, imitation = metrics["timing"], metrics["imitation"]

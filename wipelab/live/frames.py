@@ -1,12 +1,12 @@
 """Where a live session's stereo frames come from: a demo directory or two cameras.
 
 Both sources go through one :class:`FrameFeed`: a thread reads frame pairs from the source
-and hands them to the session through a buffer of a few pairs, as a camera driver does.
+and hands them to the session through a buffer (a second of pairs), as a camera driver does.
 
 * ``realtime`` (``--speed 1``): a pair is available from its arrival time on (a file's frame
   k at k / fps after the start; a camera's when it was grabbed). A session that falls
   behind finds several pairs waiting: it takes the oldest (late: a newer one has arrived
-  already), and when more than ``buffer`` are waiting the oldest are dropped. Dropped pairs
+  already), and when more than a buffer full are waiting the oldest are dropped. Dropped pairs
   are counted and leave a gap in the frame numbers (the learner is told these samples were
   not observed); nothing is skipped silently.
 * otherwise (``--speed max``): every pair is delivered, as fast as the session takes them
@@ -27,8 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: Pairs a feed holds for the session before it drops the oldest (real time).
-DEFAULT_BUFFER = 8
+#: Seconds of pairs a feed holds for the session before it drops the oldest (real time):
+#: the tracker's one-off work when it finds the sponge takes up to about half a second.
+BUFFER_SECONDS = 1.0
 
 
 @dataclass(frozen=True)
@@ -68,18 +69,19 @@ class FrameFeed:
     paced : bool
         Hold pair k back until k / fps after :meth:`start` (a file played at its frame rate;
         a camera paces itself).
-    buffer : int
-        Pairs held before the oldest are dropped (real time only).
+    buffer_seconds : float
+        Pairs held (this many seconds of them) before the oldest are dropped (real time
+        only).
     close : callable, optional
         Called when the feed stops (releases cameras).
     """
 
     def __init__(self, pairs: Callable[[], Iterator[tuple[np.ndarray, np.ndarray]]],
-                 fps: float, realtime: bool, paced: bool, buffer: int = DEFAULT_BUFFER,
+                 fps: float, realtime: bool, paced: bool, buffer_seconds: float = BUFFER_SECONDS,
                  close: Callable[[], None] | None = None):
         self.fps = float(fps)
         self.realtime, self.paced = realtime, paced
-        self.buffer = int(buffer)
+        self.buffer = max(1, math.ceil(buffer_seconds * self.fps))
         self.dropped = 0
         self._pairs, self._close = pairs, close
         self._queue: deque[FramePair | BaseException | None] = deque()
@@ -159,10 +161,10 @@ class FrameFeed:
             self._ready.notify_all()
 
 
-def demo_feed(reader, realtime: bool, buffer: int = DEFAULT_BUFFER) -> FrameFeed:
+def demo_feed(reader, realtime: bool) -> FrameFeed:
     """The pairs of a demo directory's videos (a :class:`~wipelab.vision.video_io.
     StereoVideoReader`), at their frame rate when ``realtime``."""
-    return FrameFeed(lambda: iter(reader), reader.fps, realtime, paced=realtime, buffer=buffer)
+    return FrameFeed(lambda: iter(reader), reader.fps, realtime, paced=realtime)
 
 
 def is_stream(spec: str) -> bool:

@@ -14,11 +14,13 @@ video.
    the movement learned so far (the online DMP's output, extrapolated over the frame with
    its velocity) in the air at the waiting height, phase-locked to the person: the
    demonstration's offset from the centre of the demonstration area (Fig. 3) is put around
-   the wiping centre, scaled down if it would leave the circle; it blends in from the
-   waiting pose over ``blend_seconds``;
-3. when imitation learning ends (:meth:`LiveRobot.finish` with the learned model): over one
-   period the hand moves onto the learned model's path while Omega slows down to the
-   learning tempo (Omega / ``slowdown``); then the adapt algorithm
+   the wiping centre, scaled down if it would leave the circle or ask more speed of the arm
+   than that circle at the fastest tempo the arm follows it (the placement's
+   ``max_frequency_hz``); it blends in from the waiting pose over ``blend_seconds``;
+3. when imitation learning ends (:meth:`LiveRobot.finish` with the learned model, placed as
+   adapt places a model: at the same scale, the centre of its path's bounding box on the
+   wiping centre): over one period the hand moves onto the learned model's path while
+   Omega slows down to the learning tempo (Omega / ``slowdown``); then the adapt algorithm
    (:class:`~wipelab.sim.adaptation.Adaptation`, from that phase on: compliance brings the
    sponge down until contact, the force profile is learned in a few periods, refined at the
    demonstrated tempo and held);
@@ -40,7 +42,7 @@ from wipelab.control.compliance import ComplianceParams
 from wipelab.errors import InputError
 from wipelab.learning import PeriodicModel, default_width, fit_weights
 from wipelab.sim.adaptation import MOVE, Adaptation, AdaptationParams
-from wipelab.sim.path import PathGenerator, with_kernels
+from wipelab.sim.path import PathGenerator, place_model, with_kernels
 from wipelab.sim.recording import Segment
 from wipelab.sim.session import SafetyStop, Trace
 from wipelab.sim.sponge import SpongeParams
@@ -206,11 +208,14 @@ class LiveRobot:
         return arrays
 
     # -- driven by the session ------------------------------------------------------------
-    def imitate(self, area_centre: np.ndarray, half_size: np.ndarray) -> float:
-        """Start imitating (at the next control period): the demonstration area's centre (2,)
-        and half size (2,) (m, track frame) place the movement around the wiping centre.
-        Returns the scale applied (1: as demonstrated)."""
-        scale = min(1.0, self.params.reach_radius / max(float(np.linalg.norm(half_size)), 1e-9))
+    def imitate(self, area_centre: np.ndarray, half_size: np.ndarray,
+                frequency_hz: float) -> float:
+        """Start imitating (at the next control period) a movement at ``frequency_hz`` (Hz):
+        the demonstration area's centre (2,) and half size (2,) (m, track frame) place it
+        around the wiping centre. Returns the scale applied (1: as demonstrated)."""
+        reach = self.params.reach_radius / max(float(np.linalg.norm(half_size)), 1e-9)
+        speed = self.placement["max_frequency_hz"] / frequency_hz
+        scale = min(1.0, reach * min(1.0, speed))
         self._mapping = (np.asarray(area_centre, dtype=float), scale)
         return scale
 
@@ -222,12 +227,9 @@ class LiveRobot:
         """Imitation learning ended with ``model`` (x, y, track frame) at canonical phase
         ``phase`` (rad, at the time of the last :meth:`follow`): slow down, learn the
         surface, then wipe (steps 3 and 4)."""
-        centre, scale = self._mapping
-        index = [model.dofs.index("x"), model.dofs.index("y")]
-        goal, amplitude = model.goal.copy(), model.amplitude.copy()
-        goal[index] = self.centre + scale * (goal[index] - centre)
-        amplitude[index] *= scale
-        placed = replace(model, goal=goal, amplitude=amplitude)
+        # as adapt places a model: the centre of the path's bounding box on the wiping
+        # centre (where the robot was placed for, so that replay finds the same posture)
+        placed = place_model(model, self.centre, self._mapping[1])
         self.model = with_kernels(placed, self.params.kernels)
         self._finish_phase = float(phase)
 
@@ -306,10 +308,10 @@ class LiveRobot:
             self.segments += [replace(s, start=s.start - self.time_offset) for s in new]
             seen += len(new)
             yield
+        self.adapted = self.adaptation.adapted_model({}, None)
         if self.adaptation.stop_reason is not None:
             self.stop_reason = self.adaptation.stop_reason
             return
-        self.adapted = self.adaptation.adapted_model({}, None)
         scale = self.params.replay_scale
         self._segment(f"wiping at {scale:g}x", REPLAY)
         replay = ReplayParams(frequency_scales=(scale,), modes=("learned",),

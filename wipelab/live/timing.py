@@ -44,31 +44,41 @@ class FrameTimes:
 
     def __init__(self):
         self.latencies: list[float] = []
+        self.imitating: list[bool] = []
         self.late = 0
-        self.waited = 0.0
 
-    def add(self, arrived: float, commanded: float, late: bool) -> None:
+    def add(self, arrived: float, commanded: float, late: bool, imitating: bool) -> None:
         """A frame that arrived at ``arrived`` and drove the robot's command at
-        ``commanded`` (``time.perf_counter()`` seconds)."""
+        ``commanded`` (``time.perf_counter()`` seconds); ``imitating``: the robot imitated
+        the movement learned with it (after the lock)."""
         self.latencies.append(commanded - arrived)
+        self.imitating.append(bool(imitating))
         self.late += bool(late)
 
     def summary(self, dropped: int, expected: int, session_s: float, wall_s: float,
                 waited_s: float) -> dict:
-        """metrics.json's ``timing``: latency p50 / p99 / max (ms), frames processed, late
-        and dropped (and their share of the frames the source delivered or dropped),
-        real-time factor, busy fraction and frames per second of wall time."""
+        """metrics.json's ``timing``: latency p50 / p99 / max (ms) of every frame and of the
+        frames the robot imitated with, frames processed, late and dropped (and their share
+        of the frames the source delivered or dropped), real-time factor, busy fraction and
+        frames per second of wall time."""
         latency = np.asarray(self.latencies) * 1000.0
         processed = len(self.latencies)
         total = max(expected, processed + dropped, 1)
         return {
             "frames": processed, "late_frames": self.late, "dropped_frames": dropped,
             "dropped_fraction": dropped / total, "late_fraction": self.late / total,
-            "latency_ms": {"p50": float(np.percentile(latency, 50)) if processed else None,
-                           "p99": float(np.percentile(latency, 99)) if processed else None,
-                           "max": float(latency.max()) if processed else None},
+            "latency_ms": _percentiles(latency),
+            "latency_imitating_ms": _percentiles(latency[np.array(self.imitating, bool)]),
             "session_time_s": session_s, "wall_time_s": wall_s,
             "real_time_factor": session_s / wall_s if wall_s > 0 else None,
             "busy_fraction": (wall_s - waited_s) / wall_s if wall_s > 0 else None,
             "frames_per_second": processed / wall_s if wall_s > 0 else None,
         }
+
+
+def _percentiles(values_ms: np.ndarray) -> dict:
+    """p50, p99 and max (ms) of latencies (None without any)."""
+    if not len(values_ms):
+        return {"p50": None, "p99": None, "max": None}
+    return {"p50": float(np.percentile(values_ms, 50)), "p99": float(np.percentile(values_ms, 99)),
+            "max": float(values_ms.max())}

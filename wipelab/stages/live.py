@@ -242,7 +242,7 @@ class _Session:
             self.log.scene_known(tracked_table_axes(self.tracker), self.tracker.region.size)
         self._advance(pair.index, estimate.pose, estimate.valid, estimate.quality)
         commanded = time.perf_counter()
-        self.times.add(pair.arrived, commanded, late)
+        self.times.add(pair.arrived, commanded, late, self.imitating)
         t = pair.index / self.fps
         if self.params.realtime:
             self.log.latency(t, commanded - pair.arrived)
@@ -256,7 +256,12 @@ class _Session:
         t = index / self.fps
         if imitation.locked and not self.imitating:
             self.imitating = True
-            robot.imitate(imitation.area.centre, imitation.area.half_size)
+            scale = robot.imitate(imitation.area.centre, imitation.area.half_size,
+                                  imitation.learner.frequency_hz)
+            if not self.quiet:
+                tqdm.write(f"live: the robot imitates from {t:.1f} s ({imitation.learner.frequency_hz:.2f} "
+                           f"Hz, scale {scale:.2f}); Enter or SIGUSR1 ends imitation learning",
+                           file=sys.stderr)
         if self.imitating:
             learner = imitation.learner
             robot.follow(Following(t, learner.output.copy(),
