@@ -78,3 +78,18 @@ def test_same_seed_same_bytes_other_seed_other_motion(tmp_path):
     synth(tmp_path / "c", SynthParams(pattern="figure8", frequency_hz=1.0, duration=1.0, seed=4),
           quiet=True)
     assert (tmp_path / "a" / "truth.csv").read_bytes() != (tmp_path / "c" / "truth.csv").read_bytes()
+
+
+def test_a_tempo_step_changes_the_phase_rate_and_keeps_the_phase_continuous():
+    from wipelab.vision.wiping_motion import WipingMotion, WipingMotionParams
+
+    steady = WipingMotion(WipingMotionParams("circle", 1.0), 0.8, 0.03, seed=2)
+    stepped = WipingMotion(WipingMotionParams("circle", 1.0, tempo_step=(5.0, 1.3)), 0.8, 0.03,
+                           seed=2)
+    t = np.arange(0.0, 10.0, 0.01)
+    before, after = t < 5.0, t > 5.0
+    np.testing.assert_array_equal(stepped.phase(t[before]), steady.phase(t[before]))
+    rate = np.diff(stepped.phase(t)) / 0.01 / (2 * np.pi)
+    steady_rate = np.diff(steady.phase(t)) / 0.01 / (2 * np.pi)
+    np.testing.assert_allclose(rate[after[1:]] - steady_rate[after[1:]], 0.3, atol=1e-6)
+    assert np.max(np.abs(np.diff(stepped.phase(t)))) < 2 * np.pi * 1.5 * 0.01

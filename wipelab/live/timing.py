@@ -56,11 +56,13 @@ class FrameTimes:
         self.late += bool(late)
 
     def summary(self, dropped: int, expected: int, session_s: float, wall_s: float,
-                waited_s: float) -> dict:
+                imitation_wall_s: float, busy_s: float) -> dict:
         """metrics.json's ``timing``: latency p50 / p99 / max (ms) of every frame and of the
-        frames the robot imitated with, frames processed, late and dropped (and their share
-        of the frames the source delivered or dropped), real-time factor, busy fraction and
-        frames per second of wall time."""
+        frames the robot imitated with; frames processed, late and dropped (and their share
+        of the frames the source delivered or dropped); frames per second of the frame loop
+        (``imitation_wall_s`` long); for the whole session (``session_s`` of session time in
+        ``wall_s``), the real-time factor and the fraction of the wall time spent working
+        (``busy_s``; the rest waiting for frames or the clock)."""
         latency = np.asarray(self.latencies) * 1000.0
         processed = len(self.latencies)
         total = max(expected, processed + dropped, 1)
@@ -69,12 +71,11 @@ class FrameTimes:
             "dropped_fraction": dropped / total, "late_fraction": self.late / total,
             "latency_ms": _percentiles(latency),
             "latency_imitating_ms": _percentiles(latency[np.array(self.imitating, bool)]),
+            "frames_per_second": processed / imitation_wall_s if imitation_wall_s > 0 else None,
             "session_time_s": session_s, "wall_time_s": wall_s,
             "real_time_factor": session_s / wall_s if wall_s > 0 else None,
-            "busy_fraction": (wall_s - waited_s) / wall_s if wall_s > 0 else None,
-            "frames_per_second": processed / wall_s if wall_s > 0 else None,
+            "busy_fraction": busy_s / wall_s if wall_s > 0 else None,
         }
-
 
 def _percentiles(values_ms: np.ndarray) -> dict:
     """p50, p99 and max (ms) of latencies (None without any)."""

@@ -206,6 +206,7 @@ class _Session:
         self.hand: list[np.ndarray] = []  # per frame: the robot's hand x-y (m, world)
         self.clock: SessionClock | None = None
         self.imitating = False
+        self.busy_s = 0.0   # wall time spent working (s)
 
     # -- imitation: one frame at a time -----------------------------------------------------
     def run(self, source: LiveSource) -> None:
@@ -221,8 +222,11 @@ class _Session:
                 if pair is None:
                     imitation.request_stop("end of the video")
                     break
+                taken = time.perf_counter()
                 self._frame(pair)
+                self.busy_s += time.perf_counter() - taken
                 bar.update()
+        self.imitation_wall_s = self.clock.elapsed()
         if not imitation.locked:
             self._never_locked(source)
         feed.stop()
@@ -304,6 +308,7 @@ class _Session:
         self.log.robot_trace(final=True)
         self.log.flush()
         self.wall_s = self.clock.elapsed()
+        self.busy_s += self.wall_s - self.imitation_wall_s - self.clock.waited
 
     # -- outputs ---------------------------------------------------------------------------
     def _model_source(self) -> dict:
@@ -333,8 +338,8 @@ class _Session:
                        self.model.frequency_hz, imitation.lock_time, imitation.first_tracked,
                        imitation.stop_time)}
         metrics.update(self._robot_metrics(tmp, parameters))
-        timing = self.times.summary(self.feed.dropped, len(self.rows),
-                                    robot.time, self.wall_s, self.clock.waited)
+        timing = self.times.summary(self.feed.dropped, len(self.rows), robot.time, self.wall_s,
+                                    self.imitation_wall_s, self.busy_s)
         if self.params.realtime:
             metrics["timing"] = timing
         write_json(tmp / "metrics.json", metrics)

@@ -60,6 +60,8 @@ class SynthParams:
         Table and camera placement.
     render : RenderParams
         Exposure, noise, lighting drift.
+    tempo_step : tuple of float or None
+        (time s, factor): the person wipes ``factor`` times as fast from then on.
     """
 
     pattern: str = "circle"
@@ -72,6 +74,7 @@ class SynthParams:
     sponge: SpongeBox = field(default_factory=SpongeBox)
     layout: SceneLayout = field(default_factory=SceneLayout)
     render: RenderParams = field(default_factory=RenderParams)
+    tempo_step: tuple[float, float] | None = None
 
     def __post_init__(self):
         if self.pattern not in PATTERNS:
@@ -104,6 +107,8 @@ def _demo_toml(params: SynthParams, frame_count: int, occlusions) -> str:
              "duration": params.duration, "seed": params.seed,
              "amplitude": params.amplitude or DEFAULT_AMPLITUDE[params.pattern],
              "free_hand_passes": [[e.t_in, e.t_out] for e in occlusions]}
+    if params.tempo_step is not None:
+        synth["tempo_step"] = list(params.tempo_step)
     lines = ["# wipelab demonstration metadata"]
     lines += [f"{key} = {_toml_value(value)}" for key, value in top.items()]
     lines += ["", "[synth]"] + [f"{key} = {_toml_value(value)}" for key, value in synth.items()]
@@ -138,7 +143,7 @@ def synth(out_dir: str | os.PathLike, params: SynthParams = SynthParams(),
     times = np.arange(frame_count) / params.fps
     amplitude = params.amplitude or DEFAULT_AMPLITUDE[params.pattern]
     motion = WipingMotion(WipingMotionParams(params.pattern, params.frequency_hz,
-                                             amplitude=amplitude),
+                                             amplitude=amplitude, tempo_step=params.tempo_step),
                           layout.table_height, params.sponge.height, params.seed)
     occlusions = schedule_occlusions(params.duration, np.random.default_rng([params.seed, 0x0CC]))
     eye = 0.5 * (T_world_left[:3, 3] + T_world_right[:3, 3])

@@ -42,6 +42,9 @@ class WipingMotionParams:
         Time over which the movement grows from rest to full amplitude, seconds.
     yaw_swing : float
         Amplitude of the sponge's turning with each stroke, rad.
+    tempo_step : tuple of float or None
+        (time s, factor): from that time on the person wipes ``factor`` times as fast (a
+        deliberate change of tempo; the phase stays continuous).
     """
 
     pattern: str = "circle"
@@ -53,12 +56,15 @@ class WipingMotionParams:
     centre_drift: float = 0.008
     ramp_duration: float = 1.0
     yaw_swing: float = 0.10
+    tempo_step: tuple[float, float] | None = None
 
     def __post_init__(self):
         if self.pattern not in PATTERNS:
             raise ValueError(f"pattern must be one of {', '.join(PATTERNS)}, got {self.pattern!r}")
         if self.frequency_hz <= 0 or self.amplitude <= 0:
             raise ValueError("frequency_hz and amplitude must be positive")
+        if self.tempo_step is not None and not self.tempo_step[1] > 0:
+            raise ValueError("the tempo step's factor must be positive")
 
 
 class _SlowProcess:
@@ -113,9 +119,14 @@ class WipingMotion:
         self._press = _SlowProcess(rng, 0.0004, 0.3, 1.5)
 
     def phase(self, t: np.ndarray) -> np.ndarray:
-        """Stroke phase (rad), shape like ``t``: ``2 pi f t`` plus a bounded wander."""
+        """Stroke phase (rad), shape like ``t``: ``2 pi f t`` (f times the step's factor
+        after a tempo step) plus a bounded wander."""
         t = np.asarray(t, dtype=np.float64)
-        return 2.0 * np.pi * self.params.frequency_hz * t + self._phase_wander(t)
+        elapsed = t
+        if self.params.tempo_step is not None:
+            at, factor = self.params.tempo_step
+            elapsed = t + (factor - 1.0) * np.maximum(t - at, 0.0)
+        return 2.0 * np.pi * self.params.frequency_hz * elapsed + self._phase_wander(t)
 
     def pose(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Sponge centre and yaw at times ``t``.
