@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from wipelab.errors import InputError
-from wipelab.live.frames import FrameFeed, is_stream
+from wipelab.live.frames import FrameFeed
+from wipelab.live.sources import is_stream
 
 
 def pairs(n: int):

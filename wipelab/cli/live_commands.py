@@ -78,7 +78,8 @@ def live(source: Path | None, out_dir: Path, cameras: str | None, calibration: P
     from wipelab.live.imitation import ImitationParams
     from wipelab.live.robot import RobotParams
     from wipelab.sim.adaptation import AdaptationParams
-    from wipelab.stages.live import LiveParams, LiveSource, run_live
+    from wipelab.live.sources import LiveSource
+    from wipelab.stages.live import LiveParams, run_live
     from wipelab.stages.track import TrackParams
 
     if cameras is None and source is None:

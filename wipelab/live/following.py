@@ -10,8 +10,11 @@ placement that put the demonstration in front of the robot) and sampled at the f
 * the error at time t: the RMS over the next period of hand(t') - demonstration(t' - tau)
   (both DOFs), as a fraction of the demonstration's mean peak-to-peak;
 * the hand follows from the first frame from which the error stays within
-  :data:`FOLLOW_TOLERANCE` until imitation ends; ``periods_until_following`` counts the
-  periods of the learned frequency from the first tracked frame to then.
+  :data:`FOLLOW_TOLERANCE` for a period (every window starting in the next period);
+  ``periods_until_following`` counts the periods of the learned frequency from the first
+  tracked frame to then; ``following_fraction`` is the share of the windows from then to the
+  end of imitation within the tolerance (a demonstration that the tracker loses for a while
+  throws the learner, and the hand, off for a few periods).
 """
 
 from __future__ import annotations
@@ -80,16 +83,19 @@ def following_metrics(t: np.ndarray, demo: np.ndarray, hand: np.ndarray, frequen
         window = usable[k:k + frames]
         if window.sum() > 0.5 * frames:
             error[k] = math.sqrt(np.mean(squared[k:k + frames][window])) / span
-    follows_from = None
-    checked = error[starts]
-    for i in range(len(starts)):
-        if np.all(checked[i:][np.isfinite(checked[i:])] <= FOLLOW_TOLERANCE):
-            follows_from = float(t[starts[i]])
+    follows_from, fraction = None, None
+    for k in starts:
+        ahead = (t >= t[k]) & (t <= t[k] + period) & np.isfinite(error)
+        if error[k] <= FOLLOW_TOLERANCE and np.all(error[ahead] <= FOLLOW_TOLERANCE):
+            follows_from = float(t[k])
+            after = error[starts[starts >= k]]
+            after = after[np.isfinite(after)]
+            fraction = float(np.mean(after <= FOLLOW_TOLERANCE))
             break
     steady = error[late]
     return {"lag_s": tau, "tolerance": FOLLOW_TOLERANCE,
             "steady_rms": float(np.nanmean(steady)) if np.isfinite(steady).any() else None,
-            "follows_from_s": follows_from,
+            "follows_from_s": follows_from, "following_fraction": fraction,
             "periods_until_following": None if follows_from is None
             else (follows_from - first_tracked) * frequency_hz,
             "periods_after_lock": None if follows_from is None

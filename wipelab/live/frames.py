@@ -1,7 +1,8 @@
-"""Where a live session's stereo frames come from: a demo directory or two cameras.
+"""How a live session's stereo frames arrive: :class:`FrameFeed`.
 
-Both sources go through one :class:`FrameFeed`: a thread reads frame pairs from the source
-and hands them to the session through a buffer (a second of pairs), as a camera driver does.
+Every source (:mod:`wipelab.live.sources`: a demo directory, two cameras) goes through one
+feed: a thread reads frame pairs from the source and hands them to the session through a
+buffer (a second of pairs), as a camera driver does.
 
 * ``realtime`` (``--speed 1``): a pair is available from its arrival time on (a file's frame
   k at k / fps after the start; a camera's when it was grabbed). A session that falls
@@ -159,53 +160,3 @@ class FrameFeed:
                     self.dropped += 1
             self._queue.append(item)
             self._ready.notify_all()
-
-
-def demo_feed(reader, realtime: bool) -> FrameFeed:
-    """The pairs of a demo directory's videos (a :class:`~wipelab.vision.video_io.
-    StereoVideoReader`), at their frame rate when ``realtime``."""
-    return FrameFeed(lambda: iter(reader), reader.fps, realtime, paced=realtime)
-
-
-def is_stream(spec: str) -> bool:
-    """Whether a ``--camera`` entry names a device or a stream (an OpenCV device index, a
-    URL) rather than a video file."""
-    return spec.isdigit() or "://" in spec
-
-
-def open_capture(spec: str, expected_size: tuple[int, int]):
-    """An OpenCV capture of one ``--camera`` entry, checked: it opens and delivers frames of
-    the calibration's size (InputError otherwise). Returns (capture, fps, is_file)."""
-    import cv2
-
-    from wipelab.errors import InputError
-    from wipelab.input_files import check_readable
-
-    stream = is_stream(spec)
-    if not stream:
-        check_readable(spec)
-    capture = cv2.VideoCapture(int(spec)) if spec.isdigit() else \
-        cv2.VideoCapture(spec, cv2.CAP_FFMPEG)
-    if not capture.isOpened():
-        raise InputError(f"--camera: {spec}: cannot be opened by OpenCV")
-    width = int(capture.get(cv2.CAP_PROP_FRAME_WIDTH))
-    height = int(capture.get(cv2.CAP_PROP_FRAME_HEIGHT))
-    if (width, height) != tuple(expected_size):
-        capture.release()
-        raise InputError(f"--camera: {spec}: frames are {width}x{height}, the calibration is "
-                         f"for {expected_size[0]}x{expected_size[1]}")
-    fps = float(capture.get(cv2.CAP_PROP_FPS))
-    return capture, fps, not stream
-
-
-def camera_pairs(captures) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-    """Pairs from two OpenCV captures: both grabbed first (as close in time as the devices
-    allow), then decoded; ends when either ends."""
-    while True:
-        grabbed = [capture.grab() for capture in captures]
-        if not all(grabbed):
-            return
-        frames = [capture.retrieve()[1] for capture in captures]
-        if any(frame is None for frame in frames):
-            return
-        yield frames[0], frames[1]

@@ -29,11 +29,9 @@ max`` writes the same bytes.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 
 import numpy as np
-import rerun as rr
 import rerun.blueprint as rrb
 
 from wipelab.logs import StageRecorder, stage_panels, whole_run

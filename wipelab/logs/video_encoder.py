@@ -43,7 +43,6 @@ class LiveVideoEncoder:
                            "bf": "0", "threads": "1", "g": str(KEY_FRAME_INTERVAL)}
         self._context = context
         self._av = av
-        self._count = 0
 
     def encode(self, frame_bgr: np.ndarray, t: float) -> list[bytes]:
         """The access units (Annex B bytes) of one frame (h, w, 3) uint8 shown at ``t`` (s)."""
@@ -51,5 +50,4 @@ class LiveVideoEncoder:
         frame = self._av.VideoFrame.from_ndarray(
             np.ascontiguousarray(frame_bgr[:height, :width]), format="bgr24")
         frame.pts = int(round(t * 1000))
-        self._count += 1
         return [bytes(packet) for packet in self._context.encode(frame)]

@@ -30,7 +30,7 @@ import math
 import os
 import sys
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -38,11 +38,12 @@ from tqdm import tqdm
 
 from wipelab.errors import InputError
 from wipelab.live.following import following_metrics
-from wipelab.live.frames import FrameFeed, camera_pairs, demo_feed, is_stream, open_capture
+from wipelab.live.frames import FrameFeed
 from wipelab.live.imitation import Imitation, ImitationParams
 from wipelab.live.live_log import DEMONSTRATION_FRAME, LearnerView, LiveLog, live_blueprint
 from wipelab.live.log_worker import LogWorker
 from wipelab.live.robot import Following, LiveRobot, RobotParams
+from wipelab.live.sources import LiveSource, open_source
 from wipelab.live.stop_requests import StopRequests
 from wipelab.live.timing import FrameTimes, SessionClock
 from wipelab.live.viewer import parse_viewer, viewer_sinks
@@ -51,26 +52,12 @@ from wipelab.manifest import build_manifest, write_json
 from wipelab.stage_output import staged_output
 from wipelab.stages.adapt import AdaptParams, adapt_metrics, json_parameters
 from wipelab.stages.replay import run_metrics
-from wipelab.stages.track import (TrackParams, TrackScene, colour_source, open_demo, sponge_box,
+from wipelab.stages.track import (TrackParams, TrackScene, colour_source, sponge_box,
                                   tracked_table_axes, tracked_csv_columns)
 from wipelab.trajectory_csv import write_trajectory
-from wipelab.vision.calibration import load_calibration
-from wipelab.vision.tracker import QUALITY_NONE, SpongeTracker, TrackerParams
+from wipelab.vision.tracker import SpongeTracker, TrackerParams
 
 SPEEDS = ("1", "max")
-
-
-@dataclass(frozen=True)
-class LiveSource:
-    """Where the frames come from: a demo directory, or two cameras (OpenCV device indices,
-    stream URLs or video files) with their calibration file."""
-
-    demo: Path | None = None
-    cameras: tuple[str, str] | None = None
-    calibration: Path | None = None
-
-    def describe(self) -> str:
-        return str(self.demo) if self.demo is not None else ",".join(self.cameras)
 
 
 @dataclass(frozen=True)
@@ -94,56 +81,6 @@ class LiveParams:
         return self.speed == "1"
 
 
-@dataclass
-class _Opened:
-    """A checked source: the frame feed (not started), the calibration and its file, the
-    demo's metadata, the input files for the manifest."""
-
-    feed: FrameFeed
-    calibration: object
-    calibration_path: Path
-    metadata: dict
-    inputs: dict
-
-
-def _open_source(source: LiveSource, params: LiveParams) -> _Opened:
-    """Check the source before anything runs (InputError naming what is wrong)."""
-    if source.demo is not None:
-        demo = open_demo(source.demo)
-        return _Opened(demo_feed(demo.reader, params.realtime), demo.calibration,
-                       demo.calibration_path, demo.metadata,
-                       {"left_video": demo.left, "right_video": demo.right,
-                        "calibration": demo.calibration_path})
-    calibration = load_calibration(source.calibration)
-    if params.speed == "max" and any(is_stream(spec) for spec in source.cameras):
-        raise InputError("--speed: max needs video files (a camera delivers frames at its "
-                         "own rate); use --speed 1")
-    opened = []
-    try:
-        for spec in source.cameras:
-            opened.append(open_capture(spec, calibration.image_size))
-    except BaseException:
-        for capture, _, _ in opened:
-            capture.release()
-        raise
-    rates = [fps for _, fps, _ in opened]
-    fps = params.fps or (rates[0] if rates[0] > 0 else 0.0)
-    if not fps > 0:
-        for capture, _, _ in opened:
-            capture.release()
-        raise InputError(f"--camera: {source.cameras[0]}: the camera does not report its frame "
-                         "rate; give it with --fps")
-    captures = [capture for capture, _, _ in opened]
-    files = all(is_file for _, _, is_file in opened)
-    feed = FrameFeed(lambda: camera_pairs(captures), fps, params.realtime,
-                     paced=params.realtime and files,
-                     close=lambda: [capture.release() for capture in captures])
-    inputs = {"calibration": source.calibration}
-    if files:
-        inputs |= {"left_video": Path(source.cameras[0]), "right_video": Path(source.cameras[1])}
-    return _Opened(feed, calibration, source.calibration, {}, inputs)
-
-
 def run_live(source: LiveSource, out_dir: str | os.PathLike, params: LiveParams = LiveParams(),
              quiet: bool = False, listen_stdin: bool = True) -> dict:
     """Run a live session and write its outputs into ``out_dir`` (all or nothing).
@@ -157,7 +94,7 @@ def run_live(source: LiveSource, out_dir: str | os.PathLike, params: LiveParams 
         A bad source, calibration, colour option, surface or viewer; a sponge that was never
         found; a movement the learner never locked onto.
     """
-    opened = _open_source(source, params)
+    opened = open_source(source, params.realtime, params.fps)
     try:
         toml_name = f"{source.demo}/demo.toml" if source.demo is not None else "--color"
         colour = colour_source(params.track, opened.metadata, toml_name)
@@ -176,7 +113,7 @@ def run_live(source: LiveSource, out_dir: str | os.PathLike, params: LiveParams 
             with StageRecorder(tmp, "live", parameters, opened.inputs,
                                live_blueprint(params.imitation.dofs, robot.waiting),
                                {"calibration.yaml": opened.calibration_path}, sinks) as rec, \
-                    LogWorker() as worker, StopRequests(stdin=listen_stdin) as requests:
+                    LogWorker() as worker, StopRequests() as requests:
                 scene = TrackScene(opened.calibration, DEMONSTRATION_FRAME, np.eye(3),
                                    None if sponge is None else
                                    (sponge.length, sponge.width, sponge.height), math.nan)
@@ -270,9 +207,10 @@ class _Session:
             learner = imitation.learner
             robot.follow(Following(t, learner.output.copy(),
                                    learner.omega * learner.state.velocity))
+        # where the hand is at the frame's time (the end of the last control period)
+        self.hand.append(np.asarray(robot.task.session.trace.last("tcp")[:2], dtype=float))
         robot.advance(t + 1.0 / self.fps)
         self.rows.append((np.asarray(pose, dtype=float), bool(valid), quality))
-        self.hand.append(np.asarray(robot.task.session.trace.last("tcp")[:2], dtype=float))
 
     def _never_locked(self, source: LiveSource) -> None:
         tracked = sum(valid for _, valid, _ in self.rows)
