@@ -128,8 +128,9 @@ def test_a_missing_argument_is_one_line(name, tmp_path, monkeypatch):
     first = next(p for p in cli.get_command(CONTEXT, name).params if p.required)
     result = invoke([name])
     assert result.exit_code == 2
-    kind = "argument" if isinstance(first, click.Argument) else "option"
-    error_line(result.stderr, first.human_readable_name, f"missing {kind}")
+    argument = isinstance(first, click.Argument)
+    name = first.human_readable_name if argument else max(first.opts, key=len)
+    error_line(result.stderr, name, f"missing {'argument' if argument else 'option'}")
     assert tree(tmp_path) == {}
 
 
