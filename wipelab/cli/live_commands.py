@@ -77,7 +77,7 @@ def live(source: Path | None, out_dir: Path, cameras: str | None, calibration: P
     from wipelab.errors import InputError
     from wipelab.live.imitation import ImitationParams
     from wipelab.live.robot import RobotParams
-    from wipelab.sim.adaptation import AdaptationParams
+    from wipelab.stages.adapt import AdaptParams
     from wipelab.live.sources import LiveSource
     from wipelab.stages.live import LiveParams, run_live
     from wipelab.stages.track import TrackParams
@@ -101,9 +101,9 @@ def live(source: Path | None, out_dir: Path, cameras: str | None, calibration: P
                           sponge_size=comma_separated("--sponge-size", sponge_size, 3)),
         imitation=ImitationParams(learn_periods=learn_periods,
                                   stop_on_convergence=stop_on_convergence),
-        robot=RobotParams(surface=surface, replay_scale=replay_scale,
-                          replay_periods=replay_periods, force=force, seed=seed,
-                          adaptation=AdaptationParams(slowdown=slowdown)))
+        robot=RobotParams(adapt=AdaptParams(surface=surface, force=force, slowdown=slowdown,
+                                            seed=seed),
+                          replay_scale=replay_scale, replay_periods=replay_periods))
     live_source = LiveSource(demo=source, cameras=pair, calibration=calibration)
     metrics = run_live(live_source, out_dir, params, quiet=quiet)
     if metrics["safety_stop"]:

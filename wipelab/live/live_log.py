@@ -12,10 +12,12 @@ Topics (MCAP topic = Rerun entity; time = the session's, seconds from the first 
   the robot's wiping centre, the tracked sponge's median height on the surface. So the
   3D view shows the person's sponge under the robot's hand. ``/track/position`` (m),
   ``/track/quality`` (a state), ``/track/demonstration_area`` (JSON and outline);
-* imitation learning: ``/oscillators/frequency_hz``, ``/oscillators/fundamental_hz``,
-  ``/oscillators/model_frequency_hz`` (the frequency converging), ``/live/imitation/<dof>``:
-  the demonstrated movement, the learned one (the online DMP's output) and the robot's hand,
-  normalised to the demonstration area (the paper's Fig. 5, with the robot);
+* imitation learning, from the lock on: ``/oscillators/frequency_hz``,
+  ``/oscillators/fundamental_hz``, ``/oscillators/model_frequency_hz`` (the frequency
+  converging), ``/live/imitation/<dof>``: the demonstrated movement, the learned one (the
+  online DMP's output) and the robot's hand, normalised to the demonstration area (the
+  paper's Fig. 5, with the robot); ``/live/hand_path``: the hand's path (the last 2 s are
+  drawn behind it, as the person's track);
 * the robot as adapt and replay log it (:mod:`wipelab.sim.recording`, stage name ``live``):
   joints and ``/tf``, TCP and contact heights, |F|, the segment (``/live/segment``: waiting,
   imitating, slowing down, learning, ..., wiping);
@@ -71,8 +73,8 @@ def live_blueprint(dofs, target) -> rrb.Blueprint:
     scene = rrb.Spatial3DView(
         origin="/", name="the robot imitating; the person's sponge under its hand",
         contents=["+ /**", "- /stereo/**", "- /track/particles/**"],
-        eye_controls=rrb.EyeControls3D(position=target + [0.55, -1.0, 0.6],
-                                       look_target=target - [0.1, 0.0, 0.05],
+        eye_controls=rrb.EyeControls3D(position=target + [0.8, -1.2, 0.7],
+                                       look_target=target - [0.15, 0.0, 0.1],
                                        eye_up=[0.0, 0.0, 1.0]),
         overrides={"/track/trajectory": trail, "/live/hand_path": trail})
     series = [rrb.TimeSeriesView(origin="/oscillators", name="frequency (Hz)",
@@ -273,12 +275,12 @@ class LiveLog:
         self.scene = replace(self.scene, R_track_table=R_track_table, region_size=region_size)
 
     def _learner(self, t: float, estimate, learner: LearnerView, hand_xy) -> None:
+        area = learner.area
+        if area is None:   # not locked yet: nothing the robot follows
+            return
         self.series["/oscillators/frequency_hz"].add(t, [learner.omega_hz])
         self.series["/oscillators/fundamental_hz"].add(t, [learner.fundamental_hz])
         self.series["/oscillators/model_frequency_hz"].add(t, [learner.frequency_hz])
-        area = learner.area
-        if area is None:
-            return
         if not self.area_logged:
             self._area(t, area)
         shown = area.normalise(np.stack([
@@ -312,7 +314,8 @@ class LiveLog:
         log_trace(self.rec, "live", self.robot.task, trace)
         path = trace["tcp"] if self.hand is None else np.vstack([self.hand, trace["tcp"]])
         self.rec.line_strip3d("/live/hand_path", float(trace["t"][-1]), path,
-                              color=ROBOT_COLOUR, entity_id=f"/live/hand_path/{start}")
+                              color=ROBOT_COLOUR, thickness=0.005,
+                              entity_id=f"/live/hand_path/{start}")
         self.hand = trace["tcp"][-1:]
 
     def _segments(self, segments) -> None:

@@ -38,17 +38,14 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from wipelab.control.compliance import ComplianceParams
-from wipelab.errors import InputError
 from wipelab.learning import PeriodicModel, default_width, fit_weights
-from wipelab.sim.adaptation import MOVE, Adaptation, AdaptationParams
+from wipelab.sim.adaptation import MOVE, Adaptation
 from wipelab.sim.path import PathGenerator, place_model, with_kernels
 from wipelab.sim.recording import Segment
 from wipelab.sim.session import SafetyStop, Trace
-from wipelab.sim.sponge import SpongeParams
 from wipelab.sim.surfaces import load_surface
-from wipelab.sim.task import (CALIBRATION_LIFT, TaskOptions, WipingTask, build_task,
-                              place_task, retarget_task)
+from wipelab.sim.task import CALIBRATION_LIFT, WipingTask, build_task, place_task, retarget_task
+from wipelab.stages.adapt import AdaptParams
 from wipelab.stages.replay import ReplayParams, RunResult, run_steps
 
 #: Trace labels of the live program's own parts (adapt's are MOVE 0, LEARN 1, HOLD 2,
@@ -60,26 +57,11 @@ IMITATE, SLOW_DOWN, REPLAY = 4, 5, 6
 class RobotParams:
     """The robot's side of a live session (CLI flags in brackets)."""
 
-    surface: str = "flat"                 # [--surface] built-in name or TOML file
+    adapt: AdaptParams = field(default_factory=AdaptParams)  # surface, force, slowdown, ...
     reach_radius: float = 0.15            # m: the movement the robot is placed for
     blend_seconds: float = 0.3            # s: from the waiting pose into the imitation
-    adaptation: AdaptationParams = field(default_factory=AdaptationParams)
-    kernels: int = 50                     # kernels of the adapted model (as adapt's)
     replay_scale: float = 1.0             # [--replay-scale] x the demonstrated tempo
     replay_periods: int = 3               # [--replay-periods]
-    force: float = 10.0                   # [--force] F_0 (N)
-    feedback: str = "norm"                # [--feedback] fz or norm
-    sponge_stiffness: float = 1000.0      # N/m
-    seed: int = 0                         # F/T sensor noise
-
-    def task_options(self) -> TaskOptions:
-        try:
-            return TaskOptions(sponge=SpongeParams(stiffness=self.sponge_stiffness),
-                               compliance=ComplianceParams(target_force=self.force,
-                                                           feedback=self.feedback),
-                               seed=self.seed)
-        except ValueError as error:
-            raise InputError(f"live: {error}") from None
 
 
 @dataclass(frozen=True)
@@ -131,13 +113,14 @@ class LiveRobot:
 
     def __init__(self, params: RobotParams):
         self.params = params
-        surface = load_surface(params.surface)
-        options = params.task_options()
-        placed = place_task(circle_model(params.reach_radius), surface, options,
-                            f"--surface {params.surface}")
+        adapt = params.adapt
+        adapt.validate()
+        surface = load_surface(adapt.surface)
+        placed = place_task(circle_model(params.reach_radius), surface, adapt.task_options(),
+                            f"--surface {adapt.surface}")
         self.placement = placed.record
         self.centre = np.array(placed.record["center"], dtype=float)
-        self.task = build_task(placed.model, surface, placed.options, params.surface,
+        self.task = build_task(placed.model, surface, placed.options, adapt.surface,
                                placed.plan)
         session = self.task.session
         self.waiting = np.array([*self.centre, self.task.start_height])
@@ -230,7 +213,7 @@ class LiveRobot:
         # as adapt places a model: the centre of the path's bounding box on the wiping
         # centre (where the robot was placed for, so that replay finds the same posture)
         placed = place_model(model, self.centre, self._mapping[1])
-        self.model = with_kernels(placed, self.params.kernels)
+        self.model = with_kernels(placed, self.params.adapt.kernels)
         self._finish_phase = float(phase)
 
     def advance(self, t: float) -> bool:
@@ -288,7 +271,7 @@ class LiveRobot:
 
     def _adapt_and_wipe(self):
         task = self.adapt_task = retarget_task(self.task, self.model)
-        params = self.params.adaptation
+        params = self.params.adapt.adaptation()
         omega, slow = self.model.omega, self.model.omega / params.slowdown
         path = PathGenerator(self.model, ("x", "y"), phase=self._finish_phase)
         self._segment("slowing down", SLOW_DOWN)

@@ -3,11 +3,14 @@
 A live session cannot stop on Ctrl-C: that aborts the whole command (nothing is written).
 Enter (a line on stdin) or ``kill -USR1 PID`` ends imitation learning instead, and the session
 goes on to learn the surface. A stdin that ends (``< /dev/null``, a closed pipe) is not a
-request.
+request, and a terminal is not read from by a command running in the background (reading it
+would stop the process).
 """
 
 from __future__ import annotations
 
+import io
+import os
 import signal
 import sys
 import threading
@@ -30,7 +33,7 @@ class StopRequests:
     def __enter__(self) -> "StopRequests":
         if threading.current_thread() is threading.main_thread():
             self._previous = signal.signal(signal.SIGUSR1, self._on_signal)
-        if self._stdin:
+        if self._stdin and _may_read_stdin():
             threading.Thread(target=self._read_lines, daemon=True,
                              name="wipelab-stdin").start()
         return self
@@ -50,3 +53,20 @@ class StopRequests:
             return
         if line:
             self.reason = self.reason or "Enter"
+
+
+def _may_read_stdin() -> bool:
+    """Whether stdin may be read: not a terminal (a pipe, a file), or the terminal of a
+    process in the foreground."""
+    try:
+        fd = sys.stdin.fileno()
+    except io.UnsupportedOperation:   # a stream in memory
+        return True
+    except (AttributeError, ValueError, OSError):   # none, or closed
+        return False
+    if not os.isatty(fd):
+        return True
+    try:
+        return os.tcgetpgrp(fd) == os.getpgrp()
+    except OSError:
+        return False

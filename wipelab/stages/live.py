@@ -50,7 +50,7 @@ from wipelab.live.viewer import parse_viewer, viewer_sinks
 from wipelab.logs import StageRecorder
 from wipelab.manifest import build_manifest, write_json
 from wipelab.stage_output import staged_output
-from wipelab.stages.adapt import AdaptParams, adapt_metrics, json_parameters
+from wipelab.stages.adapt import adapt_metrics, json_parameters
 from wipelab.stages.replay import run_metrics
 from wipelab.stages.track import (TrackParams, TrackScene, colour_source, sponge_box,
                                   tracked_table_axes, tracked_csv_columns)
@@ -314,21 +314,18 @@ class _Session:
         if run is None or robot.adapted is None:
             return out
         trace = robot.task.session.trace.arrays()
-        adapt_params = AdaptParams(surface=self.params.robot.surface,
-                                   force=self.params.robot.force,
-                                   feedback=self.params.robot.feedback,
-                                   learning=self.params.robot.adaptation.learning)
-        surface_entry = {"spec": self.params.robot.surface, **robot.task.surface.describe(),
+        adapt_params = self.params.robot.adapt
+        surface_entry = {"spec": adapt_params.surface, **robot.task.surface.describe(),
                          "placement": robot.placement,
                          "learning_frequency_hz": run.learning_omega / (2.0 * math.pi),
                          "tempos_hz": sorted(run.heights),
-                         "target_force_n": self.params.robot.force,
-                         "feedback": self.params.robot.feedback}
+                         "target_force_n": adapt_params.force,
+                         "feedback": adapt_params.feedback}
         adapted = run.adapted_model({"stage": "live", "parameters": parameters}, surface_entry)
         write_json(tmp / "adapted_model.json", adapted.to_dict())
         out["adapt"] = adapt_metrics(robot.adapt_task, run, trace, adapted, adapt_params)
         if robot.replay_run is not None:
             out["replay"] = {"scale": self.params.robot.replay_scale, "mode": "learned",
                              **run_metrics(robot.adapt_task, trace, robot.replay_run,
-                                           self.params.robot.force)}
+                                           adapt_params.force)}
         return out

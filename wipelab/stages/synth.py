@@ -62,6 +62,8 @@ class SynthParams:
         Exposure, noise, lighting drift.
     tempo_step : tuple of float or None
         (time s, factor): the person wipes ``factor`` times as fast from then on.
+    speed_variation : float
+        Relative standard deviation of the person's instantaneous tempo (0: steady).
     """
 
     pattern: str = "circle"
@@ -75,6 +77,7 @@ class SynthParams:
     layout: SceneLayout = field(default_factory=SceneLayout)
     render: RenderParams = field(default_factory=RenderParams)
     tempo_step: tuple[float, float] | None = None
+    speed_variation: float = 0.04
 
     def __post_init__(self):
         if self.pattern not in PATTERNS:
@@ -143,7 +146,8 @@ def synth(out_dir: str | os.PathLike, params: SynthParams = SynthParams(),
     times = np.arange(frame_count) / params.fps
     amplitude = params.amplitude or DEFAULT_AMPLITUDE[params.pattern]
     motion = WipingMotion(WipingMotionParams(params.pattern, params.frequency_hz,
-                                             amplitude=amplitude, tempo_step=params.tempo_step),
+                                             amplitude=amplitude, tempo_step=params.tempo_step,
+                                             speed_variation=params.speed_variation),
                           layout.table_height, params.sponge.height, params.seed)
     occlusions = schedule_occlusions(params.duration, np.random.default_rng([params.seed, 0x0CC]))
     eye = 0.5 * (T_world_left[:3, 3] + T_world_right[:3, 3])
