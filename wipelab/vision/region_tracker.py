@@ -41,6 +41,8 @@ from wipelab.vision.table_stereo import TableStereo
 from wipelab.vision.undistortion import Undistorter
 
 QUALITY_NONE, QUALITY_CENTROID, QUALITY_MONO, QUALITY_BOX = "", "centroid", "mono", "box"
+#: Length of the largest kitchen sponge (its visible area is under this squared), metres.
+LARGEST_SPONGE = 0.16
 
 
 @dataclass(frozen=True)
@@ -346,14 +348,14 @@ class RegionTracker:
         if len(self._recent[0]) < self.params.acquisition.window // 2:
             return False  # too few frames yet to tell still from moving
         path = track.recent(self.frame, self.params.acquisition.window)
-        sponge_size = float(np.percentile(list(track.sizes)[-len(path):], 10))
         for view, background, recent in zip(self.views, self.backgrounds, self._recent):
             background.initialise(np.stack([image for _, image, _ in recent]),
                                   np.stack([positive for _, _, positive in recent]))
             # a sponge wiping a path smaller than itself is not a still thing of its colour
             pixels = np.array([view.pixel(point) for point in path])
-            depth = float(np.median([view.depth(point) for point in path]))
-            background.release(pixels, (1.5 * sponge_size * view.focal / depth) ** 2)
+            per_metre = view.focal / float(np.median([view.depth(point) for point in path]))
+            background.release(pixels, (LARGEST_SPONGE * per_metre) ** 2,
+                               0.25 * LARGEST_SPONGE * per_metre)
         # follow the candidates of the last frames again, without what stayed still
         cleaned = CandidateTracks(self.params.acquisition)
         for (frame, left, _), (_, right, _) in zip(*self._recent):

@@ -136,19 +136,24 @@ class StaticBackground:
         y1 = min(int(np.ceil((origin[1] + height * step) * self.scale)), self.size[1])
         return x0, y0, x1, y1
 
-    def release(self, canvas_points: np.ndarray, max_area: float) -> None:
-        """Forget the still things that hold one of ``canvas_points`` (n, 2; canvas pixels)
-        and cover at most ``max_area`` canvas pixels: a sponge wiping a path smaller than
-        itself keeps its middle covered and looks still there."""
-        count, labels, stats, _ = cv2.connectedComponentsWithStats(self.still, connectivity=8)
+    def release(self, canvas_points: np.ndarray, max_area: float, max_offset: float) -> None:
+        """Forget the still things that hold the middle of a path (``canvas_points`` (n, 2),
+        canvas pixels): at most ``max_area`` canvas pixels large and centred within
+        ``max_offset`` pixels of the points' median. A sponge wiping a path smaller than
+        itself keeps the path's middle covered and looks still there; a cloth the path
+        crosses is larger, or lies elsewhere."""
+        count, labels, stats, centroids = cv2.connectedComponentsWithStats(self.still,
+                                                                            connectivity=8)
         if count <= 1:
             return
-        pixels = np.round((np.asarray(canvas_points) + 0.5) * self.scale - 0.5).astype(int)
-        inside = (pixels[:, 0] >= 0) & (pixels[:, 1] >= 0) & (pixels[:, 0] < self.size[0]) \
-            & (pixels[:, 1] < self.size[1])
-        for label in set(labels[pixels[inside, 1], pixels[inside, 0]].tolist()) - {0}:
-            if stats[label, cv2.CC_STAT_AREA] <= max_area * self.scale ** 2:
-                self.colour[labels == label] = 0.0
+        middle = (np.median(np.asarray(canvas_points), axis=0) + 0.5) * self.scale - 0.5
+        x, y = np.round(middle).astype(int)
+        if not (0 <= x < self.size[0] and 0 <= y < self.size[1]):
+            return
+        label = labels[y, x]
+        if label and stats[label, cv2.CC_STAT_AREA] <= max_area * self.scale ** 2 and \
+                np.linalg.norm(centroids[label] - middle) <= max_offset * self.scale:
+            self.colour[labels == label] = 0.0
         self.still = ((self.seen > 0.3) & (self.colour > 0.5 * self.seen)).astype(np.uint8)
 
     def still_in_canvas_image(self, image: np.ndarray) -> np.ndarray | None:
