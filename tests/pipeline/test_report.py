@@ -70,9 +70,9 @@ def test_track_figure_draws_xyz_apart_against_the_truth_with_lost_frames_shaded(
     figure = track_figure(t, position, valid, truth, quality)
     assert [ax.get_ylabel() for ax in figure.axes[:4]] == ["x (m)", "y (m)", "z (m)", "error (mm)"]
     labels = [text.get_text() for text in figure.axes[0].get_legend().get_texts()]
-    assert {"lost", "centroid only", "truth", "tracked x"} <= set(labels)
+    assert {"lost", "box fit failed: centroid", "truth", "tracked x"} <= set(labels)
     error = [text.get_text() for text in figure.axes[3].get_legend().get_texts()]
-    assert error == ["lost", "centroid only", "3D error, RMS 3.5 mm"]
+    assert error == ["lost", "box fit failed: centroid", "3D error, RMS 3.5 mm"]
     drawn = figure.axes[0].lines[0].get_ydata()
     assert np.isnan(drawn[~valid]).all()                 # a gap is a gap
     colours = {ax.lines[0].get_color() for ax in figure.axes[:3]}

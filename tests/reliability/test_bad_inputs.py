@@ -84,6 +84,15 @@ def model(**changes) -> Setup:
     return setup
 
 
+def placed(placement) -> Setup:
+    """a.json: the adapted model with ``placement`` as where adapt placed the robot."""
+    def setup(ws: Path) -> None:
+        content = json.loads((ws / "adapted.json").read_text())
+        content["surface"]["placement"] = placement
+        (ws / "a.json").write_text(json.dumps(content))
+    return setup
+
+
 def csv(rows: list[str], header: str = "t,x,y") -> Setup:
     return text("t.csv", "\n".join([header, *rows]) + "\n")
 
@@ -339,8 +348,13 @@ CASES = [
     Case("adapt", "base-text", ("model.json", *LEARN_OUT, "--base", "x"), "--base", "3 comma-separated"),
     Case("adapt", "reference-unknown", ("model.json", *LEARN_OUT, "--reference", "xyz"), "--reference", "is not one of"),
     Case("adapt", "periods-zero", ("model.json", *LEARN_OUT, "--periods", "0"), "--periods", "not in the range"),
-    Case("adapt", "unreachable", ("model.json", *LEARN_OUT, "--center", "0.88,-0.58"), "model.json",
-         "the arm cannot reach the movement"),
+    Case("adapt", "tempos-four", ("model.json", *LEARN_OUT, "--tempos", "1,4"), "--tempos", "must be in (0, 3]"),
+    Case("adapt", "tempos-text", ("model.json", *LEARN_OUT, "--tempos", "fast"), "--tempos",
+         "comma-separated numbers"),
+    Case("adapt", "unreachable", ("model.json", *LEARN_OUT, "--center", "0.88,-0.58", "--base", "0,0,0"),
+         "model.json", "the arm cannot reach the movement"),
+    Case("adapt", "nowhere-to-stand", ("model.json", *LEARN_OUT, "--surface", "s.toml"), "model.json",
+         "the arm cannot reach the movement", text("s.toml", 'type = "flat"\nheight = 1.35\n')),
     # ---- replay
     Case("replay", "model-not-json", ("m.json", *LEARN_OUT), "m.json", "not JSON", text("m.json", "[")),
     Case("replay", "model-without-z", ("model.json", *LEARN_OUT, "--mode", "learned"), "model.json", "no learned z"),
@@ -348,7 +362,12 @@ CASES = [
     Case("replay", "scale-zero", ("adapted.json", *LEARN_OUT, "--frequency-scale", "0"), "--frequency-scale",
          "positive scales"),
     Case("replay", "scale-seven", ("adapted.json", *LEARN_OUT, "--frequency-scale", "7"), "--frequency-scale",
-         "at most 6 times"),
+         "at most 4 times the demonstrated tempo"),
+    Case("replay", "placement-text", ("a.json", *LEARN_OUT), "a.json", "surface.placement is not what adapt writes",
+         placed("here")),
+    Case("replay", "placement-base-two-values", ("a.json", *LEARN_OUT), "a.json",
+         "surface.placement is not what adapt writes", placed({"base": [0.1, 0.2]})),
+    Case("replay", "base-text", ("adapted.json", *LEARN_OUT, "--base", "x"), "--base", "3 comma-separated"),
     Case("replay", "surface-not-toml", ("adapted.json", *LEARN_OUT, "--surface", "s.toml"), "s.toml",
          "not valid TOML", text("s.toml", "[")),
     Case("replay", "periods-zero", ("adapted.json", *LEARN_OUT, "--periods", "0"), "--periods", "not in the range"),

@@ -19,13 +19,11 @@ def model():
 def test_generator_follows_the_limit_cycle_and_its_derivatives(model):
     omega, dt = 2 * math.pi * 0.25, 1 / 120
     path = PathGenerator(model, ("x", "y"), phase=0.3)
-    positions, velocities, accelerations = zip(*(path.step(omega, dt) for _ in range(240)))
+    positions, velocities = zip(*(path.step(omega, dt) for _ in range(240)))
     phases = 0.3 + omega * dt * np.arange(1, 241)
     assert np.abs(np.array(positions) - dof_waveform(model, ("x", "y"), phases)).max() < 1e-7
     numeric = np.gradient(np.array(positions), dt, axis=0)
     assert np.abs(np.array(velocities) - numeric)[1:-1].max() < 1e-3 * path.max_speed(omega)
-    numeric = np.gradient(np.array(velocities), dt, axis=0)
-    assert np.abs(np.array(accelerations) - numeric)[1:-1].max() < 1e-2 * np.abs(numeric).max()
     # a circle of 10 cm radius at 0.25 Hz: 2 pi 0.1 0.25 m/s
     assert path.max_speed(omega) == pytest.approx(2 * math.pi * 0.1 * 0.25, rel=0.1)
 

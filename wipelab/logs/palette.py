@@ -25,13 +25,15 @@ SPEED_RAMP = ((235, 170, 20), (230, 80, 60), (150, 60, 190), (60, 120, 230), (40
 #: The parts of an adapt or replay run that are not a wiping run.
 PHASE_COLOURS = {"approach": (120, 120, 120), "F/T calibration": (230, 190, 60),
                  "learning": (70, 150, 230), "learned profile": (40, 175, 120),
-                 "move": (90, 90, 90), "end": (60, 60, 60)}
+                 "move": (90, 90, 90), "end": (60, 60, 60), "refining": (150, 110, 210)}
 
 
 def segment_colour(name: str) -> tuple[int, int, int]:
-    """Colour of a part of a run by its name: :data:`PHASE_COLOURS`, or for a replay run
-    ("<scale>x (<f> Hz) <mode>") the colour of its mode."""
-    return PHASE_COLOURS.get(name) or MODE_COLOURS.get(name.rsplit(" ", 1)[-1], (120, 120, 120))
+    """Colour of a part of a run by its name: :data:`PHASE_COLOURS` (adapt's "refining at
+    <f> Hz" by its first word), or for a replay run ("<scale>x (<f> Hz) <mode>") the colour
+    of its mode."""
+    return (PHASE_COLOURS.get(name) or PHASE_COLOURS.get(name.split(" ", 1)[0])
+            or MODE_COLOURS.get(name.rsplit(" ", 1)[-1], (120, 120, 120)))
 
 
 def speed_colours(scales: Sequence[float]) -> dict[float, tuple[int, int, int]]:

@@ -308,7 +308,8 @@ def force_error_bars_figure(rms_error: dict[str, dict[str, float]], title: str) 
 
     Parameters
     ----------
-    rms_error : dict speed label (e.g. "2x (0.50 Hz)") -> {mode: RMS error in N}
+    rms_error : dict tempo label (e.g. "1.5x (0.45 Hz)": x the demonstrated tempo, and the
+        Hz it ran at) -> {mode: RMS error in N}
     title : str
     """
     speeds = list(rms_error)
@@ -324,7 +325,7 @@ def force_error_bars_figure(rms_error: dict[str, dict[str, float]], title: str) 
                       color=hex_colour(MODE_COLOURS.get(mode, (128, 128, 128))))
         ax.bar_label(bars, fmt="%.2f", fontsize="x-small", padding=1)
     ax.set_xticks(x, speeds)
-    ax.set_xlabel("speed: frequency scale (frequency in Hz)")
+    ax.set_xlabel("tempo: x the demonstrated one (Hz it ran at)")
     ax.set_ylabel("RMS(|F| - F0) (N)")
     ax.set_title(title)
     ax.grid(True, axis="y", linewidth=0.5, alpha=0.5)

@@ -113,6 +113,8 @@ _LEFT_LIMITS_DEG = ((-106.91, 80.0), (-94.62, 13.85), (-69.65, 108.25), (-122.96
                     (-108.25, 69.65), (-29.36, 24.11), (-38.40, 44.32))
 _LEFT_AXIS_SIGN = (1.0, -1.0, -1.0, 1.0, -1.0, 1.0, 1.0)
 
+#: Size (m) of the platform's box: length (x), width (y), height; centred on base_link in x-y.
+PLATFORM_SIZE = (0.68, 0.68, 0.954)
 #: Distance from the wrist centre to the TCP along the approach axis (m).
 TCP_OFFSET = 0.130
 #: Palm normal of the right hand at q = 0 (faces up, tilted 15 deg toward the midline).
@@ -245,7 +247,7 @@ def armar3b_description() -> tuple[list[JointSpec], list[LinkSpec]]:
         LinkSpec("platform_x_link", 0.1, (0.0, 0.0, 0.0)),
         LinkSpec("platform_y_link", 0.1, (0.0, 0.0, 0.0)),
         LinkSpec("base_link", 100.0, (0.0, 0.0, 0.20),
-                 (Box((0.68, 0.68, 0.954), (0.0, 0.0, 0.477)),), "platform"),
+                 (Box(PLATFORM_SIZE, (0.0, 0.0, PLATFORM_SIZE[2] / 2)),), "platform"),
         LinkSpec("hip_pitch_link", 10.0, (0.0, 0.0, 0.0)),
         LinkSpec("hip_roll_link", 10.0, (0.0, 0.0, 0.0)),
         # torso box spans z 0.911-1.522 m above the floor, i.e. 0.021-0.632 m above the hip

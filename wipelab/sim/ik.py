@@ -99,6 +99,13 @@ class ArmIK:
                         *self._kernel_arguments(rotation), self.params.max_step,
                         self.params.iterations)
 
+    def joint_velocity(self, q, tcp_velocity) -> np.ndarray:
+        """Joint velocities (n,) (rad/s) that give the TCP velocity ``tcp_velocity`` (3,) (m/s)
+        at posture ``q``: the feed-forward :meth:`track` sends to the servos."""
+        return ik_velocity(*self.chain.arrays, np.asarray(q, dtype=float),
+                           np.asarray(tcp_velocity, dtype=float), self.lower, self.upper,
+                           self.cost, self.params.limit_zone, self.params.damping ** 2)
+
     def solve(self, q, position, rotation=None, max_iterations: int = 200
               ) -> tuple[np.ndarray, float]:
         """Iterate until the position error is below ``tolerance``; returns (q, error m)."""

@@ -37,6 +37,8 @@ the control loop records nothing; the series have a gap there (a null row), not 
 - ``/replay/force_by_phase/<mode>``: |F| over the phase, the mean over the scored periods of
   each run, one message per speed (``wipelab.PhaseCurves``).
 - ``/scene/surface``: the surface's grid points; Rerun also gets the surface as a mesh.
+- ``/<stage>/placement`` (JSON), ``/scene/platform_footprint``, ``/scene/path_center``: where
+  the path went and how the platform stood (:func:`log_placement`).
 """
 
 from __future__ import annotations
@@ -55,7 +57,7 @@ from wipelab.logs import StageRecorder, stage_panels, whole_run
 from wipelab.logs.palette import (INPUT_COLOUR, LEARNED_COLOUR, REFERENCE_COLOUR, segment_colour,
                                   speed_colours)
 from wipelab.logs.phase_chart import PhaseChart
-from wipelab.sim.armar3 import RIGHT_ARM_JOINTS, TORSO_JOINTS, armar3b_urdf_path
+from wipelab.sim.armar3 import PLATFORM_SIZE, RIGHT_ARM_JOINTS, TORSO_JOINTS, armar3b_urdf_path
 from wipelab.sim.kinematics import (parse_urdf_joints, quaternion_xyzw_from_rotation,
                                     quaternions_xyzw_from_rotations,
                                     rotations_from_quaternions_xyzw)
@@ -431,3 +433,22 @@ def log_run(rec: StageRecorder, stage: str, task, trace: dict, segments, profile
         _log_profiles(rec, task, trace, model, profiles)
     if runs:
         _log_force_by_phase(rec, trace, runs, task.options.compliance.target_force)
+
+
+def log_placement(rec: StageRecorder, stage: str, t: float, placement: dict) -> None:
+    """The placement the stage ran with (:func:`~wipelab.sim.task.place_task`'s record):
+    ``/<stage>/placement`` (JSON) and, in the 3D view, ``/scene/platform_footprint`` (the
+    platform's outline on the floor) and ``/scene/path_center`` (where the path's centre
+    went, on the floor under it)."""
+    rec.json(f"/{stage}/placement", t, placement, "wipelab.Placement")
+    x, y, yaw = placement["base"]
+    half = PLATFORM_SIZE[0] / 2
+    corners = np.array([[-half, -half], [half, -half], [half, half], [-half, half],
+                        [-half, -half]])
+    c, s = np.cos(yaw), np.sin(yaw)
+    outline = corners @ np.array([[c, s], [-s, c]]) + [x, y]
+    rec.line_strip3d("/scene/platform_footprint", t,
+                     np.column_stack([outline, np.full(len(outline), 0.002)]),
+                     color=(90, 200, 255), thickness=0.01)
+    rec.points3d("/scene/path_center", t, [[*placement["center"], 0.002]],
+                 colors=(90, 200, 255), radii=0.02)

@@ -52,22 +52,27 @@ class SpongeParams:
 class Grasp:
     """Where the sponge sits in the hand (unknown to the controller).
 
-    ``offset``: sponge centre minus TCP (m, world axes) with the hand at R_ref; ``tilt``:
-    (roll, pitch) in rad of the sponge about the world x and y axes with the hand at R_ref.
+    ``offset``: sponge centre minus TCP (m, the platform's axes) with the hand at R_ref;
+    ``tilt``: (roll, pitch) in rad of the sponge about the platform's x and y axes with the
+    hand at R_ref.
     """
 
     offset: tuple[float, float, float] = (0.04, 0.12, -0.09)
     tilt: tuple[float, float] = (-0.15, 0.10)
 
 
-def tcp_to_sponge(grasp: Grasp, reference_rotation: np.ndarray) -> np.ndarray:
-    """Pose (4, 4) of the sponge frame (at rest, uncompressed) in the TCP frame."""
+def tcp_to_sponge(grasp: Grasp, reference_rotation: np.ndarray, yaw: float = 0.0
+                  ) -> np.ndarray:
+    """Pose (4, 4) of the sponge frame (at rest, uncompressed) in the TCP frame, the grasp's
+    offset and tilt turned by the platform's ``yaw`` (rad): the robot holds the sponge the
+    same way whichever way it faces."""
     roll, pitch = grasp.tilt
-    level = (rotation_about_axis(np.array([1.0, 0.0, 0.0]), roll)
-             @ rotation_about_axis(np.array([0.0, 1.0, 0.0]), pitch))
+    turn = rotation_about_axis(np.array([0.0, 0.0, 1.0]), yaw)
+    level = turn @ (rotation_about_axis(np.array([1.0, 0.0, 0.0]), roll)
+                    @ rotation_about_axis(np.array([0.0, 1.0, 0.0]), pitch))
     pose = np.eye(4)
     pose[:3, :3] = reference_rotation.T @ level
-    pose[:3, 3] = reference_rotation.T @ np.asarray(grasp.offset, dtype=float)
+    pose[:3, 3] = reference_rotation.T @ turn @ np.asarray(grasp.offset, dtype=float)
     return pose
 
 

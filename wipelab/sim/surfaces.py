@@ -77,6 +77,11 @@ class Surface:
         The OBJ file of a ``mesh`` surface (its collision geometry).
     tilt : tuple of float
         (about x, about y) in rad for ``flat`` (its collision box is rotated by them).
+    footprint : ndarray (nx, ny) of bool, or None
+        Where the grid has a surface (a mesh may not cover its bounding box); None: all of it.
+    wipe_center_given : bool
+        Whether ``wipe_center`` was chosen (a built-in's, a TOML's ``wipe_center``) or is only
+        the middle of the grid.
     """
 
     name: str
@@ -89,6 +94,13 @@ class Surface:
     parameters: dict = field(default_factory=dict)
     mesh_file: Path | None = None
     tilt: tuple[float, float] = (0.0, 0.0)
+    footprint: np.ndarray | None = None
+    wipe_center_given: bool = True
+
+    def covered(self) -> np.ndarray:
+        """Where the grid has a surface: bool (nx, ny)."""
+        return (np.ones(self.heights.shape, dtype=bool) if self.footprint is None
+                else self.footprint)
 
     def height_at(self, xy) -> np.ndarray:
         """True surface height (m, world z) at points ``xy`` (..., 2), bilinear on the grid;
@@ -196,13 +208,14 @@ def heightfield_surface(name: str, heights, cell: float, origin, wipe_center=Non
     if origin.shape != (3,) or not np.all(np.isfinite(origin)):
         raise InputError(f"{source}: origin must be [x, y, z] in metres, got {origin.tolist()}")
     heights = heights.astype(float)
-    if wipe_center is None:
+    given = wipe_center is not None
+    if not given:
         extent = (np.array(heights.shape) - 1) * cell
         wipe_center = origin[:2] + extent / 2
     return Surface(name, "heightfield", heights, float(cell), origin,
                    np.asarray(wipe_center, dtype=float), friction,
                    {"file": source, "cell": float(cell), "origin": origin.tolist(),
-                    "shape": list(heights.shape)})
+                    "shape": list(heights.shape)}, wipe_center_given=given)
 
 
 def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -354,11 +367,14 @@ def _from_toml(path: Path) -> Surface:
     if np.isnan(heights).mean() > 0.5:
         raise InputError(f"{data_path}: the mesh has no upward-facing surface over most of its "
                          "footprint")
-    heights = np.where(np.isnan(heights), np.nanmin(heights), heights)
-    if center is None:
+    footprint = ~np.isnan(heights)
+    heights = np.where(footprint, heights, np.nanmin(heights))
+    given = center is not None
+    if not given:
         center = origin[:2] + (np.array(heights.shape) - 1) * cell / 2
     return Surface(path.stem, "mesh", heights, cell, origin, np.asarray(center, dtype=float),
-                   friction, {"file": str(data_path), "cell": cell}, mesh_file=data_path)
+                   friction, {"file": str(data_path), "cell": cell}, mesh_file=data_path,
+                   footprint=footprint, wipe_center_given=given)
 
 
 def load_surface(spec: str | os.PathLike) -> Surface:

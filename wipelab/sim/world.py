@@ -117,6 +117,7 @@ class StepResult:
     """What one control period produced (true values; the controller only sees ``wrench``)."""
 
     q: np.ndarray                  # (7,) measured arm joint positions (rad), SIMULATED_JOINTS
+    qd: np.ndarray                 # (7,) measured arm joint velocities (rad/s)
     wrench: np.ndarray             # (6,) F/T reading (N, N m), sensor frame, bias + noise
     sensor_rotation: np.ndarray    # (3, 3) sensor orientation in the world (from kinematics)
     sponge_force: float            # N: true total normal force surface -> sponge (period mean)
@@ -190,7 +191,7 @@ class SimWorld:
                                                                           grasp, config)
         self.urdf_text = armar3b_urdf_path().read_text()
         self.torso = np.asarray(torso, dtype=float).copy()
-        self.tcp_from_sponge = tcp_to_sponge(grasp, np.asarray(reference_rotation))
+        self.tcp_from_sponge = tcp_to_sponge(grasp, np.asarray(reference_rotation), base.yaw)
         hand_to_tcp = np.eye(4)
         hand_to_tcp[0, 3] = TCP_OFFSET
         held = {**base.joint_values(), **dict(zip(TORSO_JOINTS, self.torso))}
@@ -335,6 +336,7 @@ class SimWorld:
         n = len(targets)
         wrench = np.array(readings).sum(axis=0) / n
         return StepResult(q=np.array([s[0] for s in states[:-1]]),
+                          qd=np.array([s[1] for s in states[:-1]]),
                           wrench=self.imperfections(self.reading_convention(wrench)),
                           sensor_rotation=hand_rotation,
                           sponge_force=sponge_force / n, hand_force=hand_force / n,

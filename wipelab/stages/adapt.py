@@ -1,65 +1,51 @@
 """The adapt stage: learn the force profile of a surface on the simulated ARMAR-IIIb (Sec. II-B).
 
-Flow (paper Sec. III-A3, III-B2):
+The model's x-y path (its oscillation scaled by ``amplitude_scale``) is placed on the surface
+and the platform is placed in front of it (:func:`~wipelab.sim.task.place_task`: the
+placement search of :mod:`~wipelab.sim.placement`, checked with the full IK; ``center`` and
+``base`` fix either or both; the choice is in ``metrics.json``, the manifest, the adapted
+model's ``surface`` entry and the logs). The adapted model has ``kernels`` kernels (50 by
+default, twice the learn stage's 25: a surface's height profile has sharper features than a
+hand's wiping path, and the locally constant fit of eqs. 13-15 smooths it by about a kernel
+width); the x-y path is refitted onto them
+(:func:`~wipelab.sim.path.with_kernels`, its error is in ``metrics.json``, a few hundredths of
+a millimetre). Then :class:`~wipelab.sim.adaptation.Adaptation` runs: online learning at the
+slowed-down tempo as in the paper, refining by iterative learning at the learning tempo and
+at ``tempos`` times the demonstrated one, and a hold at the demonstrated tempo (its docstring
+has the details).
 
-1. The model's x-y path is placed on the table (:func:`~wipelab.sim.path.place_model`:
-   centre of its bounding box at ``center``, default the surface's wiping centre) and slowed
-   down: Omega is divided by ``slowdown``. The adapted model has ``kernels`` kernels (50 by
-   default, twice the learn stage's 25: a surface's height profile has sharper features than
-   a hand's wiping path, and the locally constant fit of eqs. 13-15 smooths it by about a
-   kernel width); the x-y path is refitted onto them (:func:`~wipelab.sim.path.with_kernels`,
-   its error is in ``metrics.json``, a few hundredths of a millimetre).
-2. The hand goes above the start of the path, identifies its payload (F/T gravity
-   compensation), then the movement starts with active compliance in z (eqs. 9-12): without
-   contact the hand moves down at the velocity cap until the sponge presses with F_0.
-3. In every control period the commanded height Y (eq. 10) is learned as a new DOF z of the
-   DMP, anchored to the x-y phase (eqs. 13-15). The reference Y_r of eq. 10 is the start
-   height in the first period; from the second on it is the profile learned so far (the
-   default ``reference="learned"``, see
-   :class:`~wipelab.control.force_profile.ProfileLearningParams`; ``"start"`` keeps the
-   paper's constant Y_r). Learning stops when the learned waveform changes by less than
-   ``tolerance`` over a period (the convergence criterion of
-   :class:`~wipelab.control.force_profile.ConvergenceMonitor`) or after ``periods`` periods.
-4. ``hold_periods`` more periods run the learned profile with compliance on top (the end of
-   learning is marked in the logs, as the dashed line of the paper's Figs. 6-7).
-
-Outputs: ``adapted_model.json`` (x, y as placed, learned z; ``surface`` records where it was
-learned), ``metrics.json``, ``adapt.mcap``, ``adapt.rrd``, ``manifest.json``.
+Outputs: ``adapted_model.json`` (x, y as placed, learned ``z`` and ``z_per_hz``; ``surface``
+records where and how it was learned), ``metrics.json``, ``adapt.mcap``, ``adapt.rrd``,
+``manifest.json``.
 """
 
 from __future__ import annotations
 
 import math
 import os
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
 from wipelab.control.compliance import ComplianceParams
-from wipelab.control.force_profile import (COMPARISON_PHASES, ConvergenceMonitor,
-                                           ForceProfileLearner, ProfileLearningParams)
+from wipelab.control.force_profile import ProfileLearningParams
+from wipelab.control.iterative_learning import IterativeLearningParams
 from wipelab.errors import InputError
-from wipelab.learning import PeriodicModel
 from wipelab.logs import StageRecorder
 from wipelab.manifest import build_manifest, sha256_file, write_json
-from wipelab.sim.metrics import coverage, force_metrics, profile_error
 from wipelab.model_file import read_model
-from wipelab.sim.path import (PathGenerator, place_model, refit_error, require_dofs,
+from wipelab.sim.adaptation import Adaptation, AdaptationParams
+from wipelab.sim.metrics import coverage, force_metrics, profile_error
+from wipelab.sim.path import (at_frequency, place_model, refit_error, require_dofs,
                               with_kernels)
-from wipelab.sim.recording import Segment, adapt_blueprint, log_run
-from wipelab.sim.session import SafetyStop
+from wipelab.sim.recording import adapt_blueprint, log_placement, log_run
 from wipelab.sim.sponge import SpongeParams
 from wipelab.sim.surfaces import load_surface
-from wipelab.sim.task import CALIBRATION_LIFT, TaskOptions, WipingTask, build_task
+from wipelab.sim.task import TaskOptions, WipingTask, build_task, place_task
 from wipelab.sim.world import BasePose
 from wipelab.stage_output import staged_output
-
-#: Trace segment labels.
-MOVE, LEARN, HOLD = 0, 1, 2
-#: Amplitude r (m) of the learned z DOF: its weights are in metres.
-Z_AMPLITUDE = 1.0
 
 
 @dataclass(frozen=True)
@@ -67,18 +53,20 @@ class AdaptParams:
     """Parameters of ``wipelab adapt`` (CLI flags in brackets)."""
 
     surface: str = "flat"              # [--surface] built-in name or TOML file
-    center: tuple[float, float] | None = None  # [--center] m, world; None: the surface's
+    center: tuple[float, float] | None = None  # [--center] m, world; None: chosen
     amplitude_scale: float = 1.0       # [--amplitude-scale] of the x-y oscillation
     slowdown: float = 4.0              # [--slowdown] Omega is divided by this while learning
-    periods: int = 8                   # [--periods] most learning periods
-    hold_periods: int = 1              # [--hold-periods] periods with the learned profile after
+    periods: int = 8                   # [--periods] most online learning periods
+    tempos: tuple[float, ...] = (1.0,)  # [--tempos] refined at these x the demonstrated tempo
+    hold_periods: int = 1              # [--hold-periods] at the demonstrated tempo, after
     force: float = 10.0                # [--force] F_0 in N
     feedback: str = "norm"             # [--feedback] fz or norm
-    base: tuple[float, float, float] = (0.0, 0.0, 0.0)  # [--base] x, y (m), yaw (rad)
+    base: tuple[float, float, float] | None = None  # [--base] x, y (m), yaw (rad); None: chosen
     sponge_stiffness: float = 1000.0   # [--sponge-stiffness] N/m
     seed: int = 0                      # [--seed] sensor noise
     kernels: int = 50                  # [--kernels] N of the adapted model (x-y refitted)
     learning: ProfileLearningParams = field(default_factory=ProfileLearningParams)
+    iterative: IterativeLearningParams = field(default_factory=IterativeLearningParams)
 
     def task_options(self) -> TaskOptions:
         """The robot/world options these parameters imply (InputError if invalid)."""
@@ -87,8 +75,11 @@ class AdaptParams:
             sponge = SpongeParams(stiffness=self.sponge_stiffness)
         except ValueError as error:
             raise InputError(f"adapt: {error}") from None
-        return TaskOptions(base=BasePose(*self.base), sponge=sponge, compliance=compliance,
-                           seed=self.seed)
+        return TaskOptions(sponge=sponge, compliance=compliance, seed=self.seed)
+
+    def adaptation(self) -> AdaptationParams:
+        return AdaptationParams(self.slowdown, self.periods, tuple(self.tempos),
+                                self.hold_periods, self.learning, self.iterative)
 
     def validate(self) -> None:
         if not self.slowdown >= 1.0:
@@ -99,122 +90,30 @@ class AdaptParams:
             raise InputError(f"--kernels: must be in [5, 200], got {self.kernels}")
         if not 0 < self.amplitude_scale <= 3:
             raise InputError(f"--amplitude-scale: must be in (0, 3], got {self.amplitude_scale}")
-
-
-@dataclass
-class AdaptRun:
-    """What the learning loop produced."""
-
-    learner: ForceProfileLearner
-    monitor: ConvergenceMonitor
-    segments: list[Segment]
-    profiles: list[tuple[float, np.ndarray]]   # (time s, learned z at COMPARISON_PHASES)
-    omega: float
-    end_of_learning: float
-    stop_reason: str | None = None
-
-
-def _learn(task: WipingTask, model: PeriodicModel, params: AdaptParams, quiet: bool) -> AdaptRun:
-    session = task.session
-    dt = session.dt
-    omega = model.omega / params.slowdown
-    path = PathGenerator(model, ("x", "y"), phase=0.0)
-    start = np.array([*path.position, task.start_height])
-    segments = [Segment("approach", MOVE, 0.0)]
-    session.move_to(start + [0.0, 0.0, CALIBRATION_LIFT], 1.5, mode=MOVE)
-    session.calibrate()
-    session.move_to(start, 0.8, mode=MOVE)
-    learner = ForceProfileLearner(model.kernels, model.width, model.alpha_s, model.beta_s,
-                                  goal=task.start_height, amplitude=Z_AMPLITUDE, dt=dt,
-                                  params=params.learning)
-    monitor = ConvergenceMonitor(params.learning)
-    run = AdaptRun(learner, monitor, segments, [], omega, math.nan)
-    segments.append(Segment("learning", LEARN, session.time))
-    task.world.set_tool_speed(path.max_speed(omega))
-    period_steps = int(math.ceil(2.0 * math.pi / (omega * dt)))
-    total = period_steps * (params.periods + params.hold_periods)
-    reference = None   # Y_r: the start height, or (reference "learned") the profile so far
-    with tqdm(total=total, desc="adapt", unit="step", disable=quiet, leave=False) as bar:
-        try:
-            period_end = 2.0 * math.pi
-            while monitor.periods_ < params.periods and not monitor.converged:
-                xy, velocity, acceleration = path.step(omega, dt)
-                z = ((task.start_height, 0.0, 0.0) if reference is None else
-                     [value[0] for value in reference.step(omega, dt)])
-                session.tick(xy, z[0], True, path.phase,
-                             velocity=np.array([velocity[0], velocity[1], z[1]]),
-                             acceleration=np.array([acceleration[0], acceleration[1], z[2]]),
-                             mode=LEARN)
-                learner.update(session.trace.last("tcp_cmd")[2], path.phase, omega)
-                bar.update()
-                if path.phase >= period_end:
-                    period_end += 2.0 * math.pi
-                    profile = learner.waveform(COMPARISON_PHASES)
-                    monitor.end_of_period(profile)
-                    run.profiles.append((session.time, profile))
-                    if params.learning.reference == "learned":
-                        reference = PathGenerator(adapted_model(model, learner, {}, None),
-                                                  ("z",), phase=path.phase)
-                        # Y of eq. 10 continues where it is: the offset takes the difference
-                        session.integrator.offset_ = session.trace.last("tcp_cmd")[2] - \
-                            reference.position[0]
-            run.end_of_learning = session.time
-            segments.append(Segment("learned profile", HOLD, session.time))
-            adapted = adapted_model(model, learner, {}, None)
-            replay = PathGenerator(adapted, ("x", "y", "z"), phase=path.phase)
-            task.world.set_tool_speed(replay.max_speed(omega))
-            z_now = session.trace.last("tcp_cmd")[2]
-            # continuity at the switch: compliance keeps the small difference and corrects it
-            session.integrator.offset_ = z_now - replay.position[2]
-            hold_end = path.phase + 2.0 * math.pi * params.hold_periods
-            while replay.phase < hold_end:
-                position, velocity, acceleration = replay.step(omega, dt)
-                session.tick(position[:2], position[2], True, replay.phase, velocity=velocity,
-                             acceleration=acceleration, mode=HOLD)
-                bar.update()
-        except SafetyStop as stop:
-            run.stop_reason = str(stop)
-            if math.isnan(run.end_of_learning):
-                run.end_of_learning = session.time
-    segments.append(Segment("end", MOVE, session.time))
-    return run
-
-
-def adapted_model(model: PeriodicModel, learner: ForceProfileLearner, source: dict,
-                  surface: dict | None) -> PeriodicModel:
-    """The placed x-y model plus the learned z (goal moved to the profile's mean; the weights
-    shifted by alpha_s beta_s dg / r so that the limit cycle is unchanged)."""
-    weights = learner.weights_
-    goal = float(np.mean(learner.waveform(COMPARISON_PHASES)))
-    weights = weights - model.alpha_s * model.beta_s * (goal - learner.goal) / Z_AMPLITUDE
-    base = model
-    if "z" in model.dofs:  # a demonstrated height is replaced by the learned one
-        keep = [i for i, d in enumerate(model.dofs) if d != "z"]
-        base = replace(model, dofs=tuple(model.dofs[i] for i in keep), goal=model.goal[keep],
-                       amplitude=model.amplitude[keep], weights=model.weights[keep])
-    return replace(base.with_dof("z", weights, goal, Z_AMPLITUDE), source=source,
-                   surface=surface)
+        if any(not 0 < t <= 3 for t in self.tempos):
+            raise InputError(f"--tempos: each must be in (0, 3] (x the demonstrated tempo), "
+                             f"got {list(self.tempos)}")
 
 
 def _window(trace: dict, start: float, end: float) -> np.ndarray:
     return (trace["t"] > start) & (trace["t"] <= end)
 
 
-def _metrics(task: WipingTask, run: AdaptRun, trace: dict, adapted: PeriodicModel,
-             params: AdaptParams) -> dict:
+def _metrics(task: WipingTask, run: Adaptation, trace: dict, adapted, params: AdaptParams
+             ) -> dict:
     f0 = params.force
-    period = 2.0 * math.pi / run.omega
-    learning_start = run.segments[1].start
-    last_learning = _window(trace, max(learning_start, run.end_of_learning - period),
-                            run.end_of_learning)
-    hold = _window(trace, run.end_of_learning, run.segments[-1].start)
-    z_index = adapted.dofs.index("z")
+    learning_hz = run.learning_omega / (2.0 * math.pi)
+    learning_start = run.segments[1].start if len(run.segments) > 1 else math.inf
+    last_learning = _window(trace, max(learning_start, run.end_of_online_learning
+                                       - 1.0 / learning_hz), run.end_of_online_learning)
+    hold = _window(trace, run.hold_start, run.segments[-1].start)
 
-    def profile(window):
+    def profile(window, frequency_hz):
         if not window.any():
             return None
         expected = task.expected_contact_height(trace["tcp"][window, :2], trace["tcp_rot"][window])
-        learned = adapted.waveform(trace["phase"][window])[:, z_index]
+        model = at_frequency(adapted, frequency_hz)
+        learned = model.waveform(trace["phase"][window])[:, model.dofs.index("z")]
         return profile_error(learned, expected)
 
     def forces(window):
@@ -232,16 +131,21 @@ def _metrics(task: WipingTask, run: AdaptRun, trace: dict, adapted: PeriodicMode
         "surface": task.surface.describe(),
         "target_force_n": f0,
         "feedback": params.feedback,
-        "learning_frequency_hz": run.omega / (2.0 * math.pi),
+        "demonstrated_frequency_hz": adapted.frequency_hz,
+        "learning_frequency_hz": learning_hz,
+        "hold_frequency_hz": run.hold_frequency_hz,
+        "max_frequency_hz": task.max_frequency_hz,
         "learning": {
             "periods": run.monitor.periods_,
             "converged": run.monitor.converged,
             "tolerance_m": params.learning.tolerance,
             "waveform_change_per_period_m": changes,
+            "online_end_time_s": run.end_of_online_learning,
             "end_time_s": run.end_of_learning,
         },
-        "profile_last_learning_period": profile(last_learning),
-        "profile_hold": profile(hold),
+        "tempos": [stage.describe() for stage in run.stages],
+        "profile_last_learning_period": profile(last_learning, learning_hz),
+        "profile_hold": profile(hold, run.hold_frequency_hz),
         "force_last_learning_period": forces(last_learning),
         "force_hold": forces(hold),
         "safety_stop": run.stop_reason,
@@ -263,24 +167,31 @@ def run_adapt(model_path: str | os.PathLike, out_dir: str | os.PathLike,
     model = read_model(model_path)
     require_dofs(model, ("x", "y"), str(model_path))
     surface = load_surface(params.surface)
-    options = params.task_options()
-    centre = surface.wipe_center if params.center is None else np.asarray(params.center)
-    as_learned = place_model(model, centre, params.amplitude_scale)
-    placed = with_kernels(as_learned, params.kernels)
+    as_learned = place_model(model, (0.0, 0.0), params.amplitude_scale)
+    refitted = with_kernels(as_learned, params.kernels)
+    placement = place_task(refitted, surface, params.task_options(), str(model_path),
+                           params.center, None if params.base is None else BasePose(*params.base))
+    placed = placement.model
     parameters = json_parameters(params)
-    task = build_task(placed, surface, options, str(model_path))
+    task = build_task(placed, surface, placement.options, str(model_path), placement.plan)
     try:
-        run = _learn(task, placed, params, quiet)
+        run = Adaptation(task, placed, params.adaptation())
+        with tqdm(desc="adapt", unit="step", disable=quiet, leave=False) as bar:
+            while run.step():
+                bar.update()
         trace = task.session.trace.arrays()
         source = {"stage": "adapt", "model_sha256": sha256_file(model_path),
                   "parameters": parameters}
         surface_entry = {"spec": params.surface, **surface.describe(),
-                         "learning_frequency_hz": run.omega / (2.0 * math.pi),
+                         "placement": placement.record,
+                         "learning_frequency_hz": run.learning_omega / (2.0 * math.pi),
+                         "tempos_hz": sorted(run.heights),
                          "target_force_n": params.force, "feedback": params.feedback}
-        adapted = adapted_model(placed, run.learner, source, surface_entry)
+        adapted = run.adapted_model(source, surface_entry)
         metrics = _metrics(task, run, trace, adapted, params)
+        metrics["placement"] = placement.record
         metrics["kernels"] = {"model": model.kernels, "adapted": adapted.kernels,
-                              "xy_refit_error_m": refit_error(as_learned, placed, ("x", "y"))}
+                              "xy_refit_error_m": refit_error(as_learned, refitted, ("x", "y"))}
         inputs = {"model": model_path}
         if Path(params.surface).suffix.lower() == ".toml":
             inputs["surface"] = Path(params.surface)
@@ -289,8 +200,10 @@ def run_adapt(model_path: str | os.PathLike, out_dir: str | os.PathLike,
             write_json(tmp / "metrics.json", metrics)
             with StageRecorder(tmp, "adapt", parameters, inputs, adapt_blueprint(trace)) as rec:
                 log_run(rec, "adapt", task, trace, run.segments, run.profiles, adapted)
+                log_placement(rec, "adapt", float(trace["t"][0]), placement.record)
             write_json(tmp / "manifest.json",
-                       build_manifest("adapt", inputs, parameters, params.seed))
+                       {**build_manifest("adapt", inputs, parameters, params.seed),
+                        "placement": placement.record})
     finally:
         task.close()
     return metrics
