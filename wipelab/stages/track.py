@@ -234,7 +234,8 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
             raise InputError(f"--roi: region {x},{y},{w},{h} does not fit in the "
                              f"{width}x{height} frames")
     tracker_params = TrackerParams(particles=params.particles, seed=params.seed,
-                                   sponge=_sponge(params, demo.metadata, toml_name))
+                                   sponge=_sponge(params, demo.metadata, toml_name),
+                                   fps=demo.reader.fps)
     tracker = SpongeTracker(demo.calibration, colour, tracker_params)
     result = run_tracker(tracker, demo.reader, params, quiet)
     if result is None and not tracker.region.frames_with_candidates:
@@ -282,13 +283,19 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
     m = params.logged_particles
     particles = np.full((n, m, 4), np.nan)
     least = int(round(params.warmup * reader.fps))
-    with tqdm(total=n, desc="track: finding the sponge", unit="frame", disable=quiet,
-              file=sys.stderr, leave=False) as bar:
-        for k, (left, right) in enumerate(reader):
-            tracker.step(left, right)
-            bar.update()
-            if k + 1 >= least and tracker.ready:
-                break
+    for attempt in range(2):
+        with tqdm(total=n, desc="track: finding the sponge", unit="frame", disable=quiet,
+                  file=sys.stderr, leave=False) as bar:
+            for k, (left, right) in enumerate(reader):
+                tracker.step(left, right)
+                bar.update()
+                if k + 1 >= least and tracker.ready:
+                    break
+        if tracker.identified:
+            break
+        # a video too short for the wiping to show as periodic motion: any motion will do
+        tracker.accept_any_motion()
+        tracker.restart()
     if not tracker.identified:
         return None
     tracker.restart()

@@ -245,7 +245,8 @@ class RegionTracker:
         self.seed_masks: list[np.ndarray] = []
         # before the sponge is known: per camera, the last frames in the background's
         # pixels and where they show the colour (to find still things of the colour)
-        window = params.acquisition.window
+        acquisition = params.acquisition
+        window = max(acquisition.window, int(1.5 * acquisition.periods[1] * acquisition.fps) + 1)
         self._recent = [deque(maxlen=window), deque(maxlen=window)]
 
     # ----------------------------------------------------------------- public
@@ -261,6 +262,8 @@ class RegionTracker:
         self.history.clear()
         self.failures = self.params.coast_frames + 1
         self.candidates.tracks.clear()
+        for recent in self._recent:
+            recent.clear()
         self._last_seen = None  # the pass starts where the video starts, not where it ended
 
     def observe(self, point: np.ndarray) -> None:
@@ -356,41 +359,49 @@ class RegionTracker:
             per_metre = view.focal / float(np.median([view.depth(point) for point in path]))
             background.release(pixels, (LARGEST_SPONGE * per_metre) ** 2,
                                0.25 * LARGEST_SPONGE * per_metre)
-        # follow the candidates of the last frames again, without what stayed still
-        cleaned = CandidateTracks(self.params.acquisition)
-        for (frame, left, _), (_, right, _) in zip(*self._recent):
-            cleaned.update(frame, self._search_candidates(None, self.prior, [left, right]))
-        moving = cleaned.moving(self.frame)
-        if moving is None or np.linalg.norm(moving.last_point - track.last_point) > \
-                max(track.size, 0.05):
+        if self._above_the_table(frames, track):
+            self.candidates.rejected.add(track.ident)
+            return False
+        # the candidate's region again, without what stayed still: nothing left means it
+        # was a still thing that the sponge (or an arm) touched
+        self.size, self.model = track.size, self.prior
+        rays, areas = [], []
+        for view, frame, background in zip(self.views, frames, self.backgrounds):
+            region = self._region(view, frame, track.last_point, 0.02, background)
+            if region is None:
+                break
+            rays.append(region[0])
+            areas.append(region[1] * (view.depth(track.last_point) / view.focal) ** 2)
+        if len(rays) < 2:
             self.candidates.static[track.ident] = (track.last_point.copy(), track.size)
             self.candidates.tracks = [t for t in self.candidates.tracks if t is not track]
-            return False
-        if self._above_the_table(frames, moving):
-            self.candidates.rejected.add(track.ident)
+            self.size = self.model = None
             return False
         for recent in self._recent:
             recent.clear()
-        point, self.size = moving.last_point, moving.size
-        masks, windows = [], []
+        point = triangulate_rays(rays[0][None], rays[1][None], self.calibration.R,
+                                 self.calibration.T)[0][0]
+        self.size = float(np.sqrt(np.mean(areas)))
+        masks, cores, windows = [], [], []
         for view, frame, background in zip(self.views, frames, self.backgrounds):
             window, origin, _ = self._window(view, frame, point, 1.5 * self.size)
             probability = self.prior.back_project(window)
-            still = background.still_colour(window, origin, 1)
-            if still is not None:
-                probability[still] = 0.0
             centre = view.pixel(point) - origin
             reach = 0.8 * self.size * view.focal / view.depth(point)
             blobs = [b for b in find_blobs(probability, min_area=4)
                      if np.linalg.norm(b.centroid - centre) < reach + b.radius]
-            mask = np.zeros(window.shape[:2], np.uint8)
+            region = blob_mask(probability, blobs, grow=0)
+            masks.append(region.astype(np.uint8) * 255)
             # the sponge's colour is learnt from the pixels well inside the named colour only:
             # the soft edge of the prior may take in a hand of a near hue
-            mask[blob_mask(probability, blobs, grow=0) & (probability > 0.99)] = 255
-            masks.append(mask)
+            cores.append((region & (probability > 0.99)).astype(np.uint8) * 255)
             windows.append(window)
-        self.model = ColourModel.fit(windows, masks) if all(m.any() for m in masks) \
-            else self.prior
+        if all(core.any() for core in cores):
+            self.model = ColourModel.fit(windows, cores)
+        elif all(mask.any() for mask in masks):
+            self.model = ColourModel.fit(windows, masks)
+        else:
+            self.model = self.prior
         self.history.append((self.frame - 1, point.copy()))
         self.seed_windows, self.seed_masks = windows, masks
         self._table_centre = point.copy()

@@ -104,20 +104,35 @@ class StaticBackground:
         """
         small = self.canvas_image(frame)
         weight = self.rate * self.in_frame
+        under = np.zeros(weight.shape, np.uint8)
         for mask, origin, step in keep_out:
             x0, y0, x1, y1 = self._bounds(origin, mask.shape, step)
             if x1 > x0 and y1 > y0:
                 inside = cv2.resize(mask.astype(np.uint8), (x1 - x0, y1 - y0),
                                     interpolation=cv2.INTER_AREA)
-                inside = cv2.dilate(inside, np.ones((3, 3), np.uint8))
-                weight[y0:y1, x0:x1][inside > 0] = 0.0
+                under[y0:y1, x0:x1] |= cv2.dilate(inside, np.ones((3, 3), np.uint8))
+        weight[under > 0] = 0.0
         colour = (model.back_project(small) > 0.5).astype(np.float32)
         self.image += weight[..., None] * (small.astype(np.float32) - self.image)
         self.colour += weight * (colour - self.colour)
         self.seen += weight * (1.0 - self.seen)
         self.updates += 1
         self.still = ((self.seen > 0.3) & (self.colour > 0.5 * self.seen)).astype(np.uint8)
+        self._forget_ghosts(under)
         self._mean = None
+
+    def _forget_ghosts(self, under: np.ndarray) -> None:
+        """A still thing that lies (nine tenths of it) under the sponge now is the sponge
+        itself, mistaken for one while it rested or wiped a path smaller than itself: forget
+        it. A cloth or a plate the sponge is on reaches beyond it."""
+        if not (self.still & under).any():
+            return
+        count, labels, stats, _ = cv2.connectedComponentsWithStats(self.still, connectivity=8)
+        covered = np.bincount(labels[under > 0], minlength=count)
+        for label in range(1, count):
+            if covered[label] >= 0.9 * stats[label, cv2.CC_STAT_AREA]:
+                self.colour[labels == label] = 0.0
+        self.still = ((self.seen > 0.3) & (self.colour > 0.5 * self.seen)).astype(np.uint8)
 
     @property
     def mean(self) -> np.ndarray:
