@@ -92,6 +92,10 @@ class RegionTrackerParams:
     max_height : float
         A moving thing of the sponge's colour whose centre keeps higher than this above the
         table is not the sponge (a hand or sleeve of a near colour), metres.
+    still_seconds, still_travel : float
+        A tracked thing that moves less than ``still_travel`` metres (90th percentile of its
+        distances from their median) over ``still_seconds`` is a still thing the tracker went
+        to, not a wiping sponge: it is remembered as still and the sponge searched again.
     """
 
     search_width: int = 320
@@ -112,6 +116,8 @@ class RegionTrackerParams:
     table_every: int = 15
     table_radius: float = 0.5
     max_height: float = 0.08
+    still_seconds: float = 3.0
+    still_travel: float = 0.01
 
 
 @dataclass
@@ -236,7 +242,7 @@ class RegionTracker:
         self.valid_count = 0
         self.frames_with_candidates = 0  # before identification: frames showing the colour
         self._stereo_points: deque[np.ndarray] = deque(maxlen=900)
-        self._valid_points: deque[np.ndarray] = deque(maxlen=600)  # the last 20 s at 30 Hz
+        self._valid_points: deque[tuple[int, np.ndarray]] = deque(maxlen=600)  # (frame, point)
         self._last_seen: np.ndarray | None = None
         self._plane: Plane | None = None
         # the sponge's pixels in both cameras when it was identified (window images, 0/255
@@ -273,7 +279,7 @@ class RegionTracker:
         point = np.asarray(point, dtype=np.float64).copy()
         self.history.append((self.frame, point))
         self._last_seen = point
-        self._valid_points.append(point)
+        self._valid_points.append((self.frame, point))
         self.failures = 0
 
     def step(self, left: np.ndarray, right: np.ndarray) -> RegionEstimate:
@@ -447,7 +453,7 @@ class RegionTracker:
         sponge's size and a margin (None before any valid point)."""
         if not self._valid_points:
             return None, 0.0
-        points = np.array(self._valid_points)
+        points = np.array([point for _, point in self._valid_points])
         centre = np.median(points, axis=0)
         spread = float(np.percentile(np.linalg.norm(points - centre, axis=1), 98))
         return centre, spread + self.size + 0.05
@@ -568,6 +574,10 @@ class RegionTracker:
                 point, reason = None, reason + "; the one camera's region jumped"
         if point is None:
             return self._fail(rays, areas, stereo, reason or "no plane yet for one camera")
+        if self._kept_still(point):
+            self._forget_track(point)
+            return self._fail(rays, areas, stereo, "what was tracked has not moved for "
+                              f"{p.still_seconds:g} s: a still thing, not the sponge")
         self._accept(frames, point, rays, metric_areas, stereo, good)
         if self.frame % p.background_every == 0:
             self._update_backgrounds(frames, masks)
@@ -690,10 +700,10 @@ class RegionTracker:
     def _accept(self, frames, point, rays, areas, stereo, good) -> None:
         self.history.append((self.frame, point.copy()))
         self._last_seen = point.copy()
-        self._valid_points.append(point.copy())
+        self._valid_points.append((self.frame, point.copy()))
         # a "still thing" where the sponge is now was the sponge resting before it moved
         for ident, (centre, _) in list(self.candidates.static.items()):
-            if np.linalg.norm(centre - point) < 0.5 * self.size:
+            if ident >= 0 and np.linalg.norm(centre - point) < 0.5 * self.size:
                 del self.candidates.static[ident]
         self.failures = 0
         self.valid_count += 1
@@ -716,6 +726,27 @@ class RegionTracker:
             if self._ray_change is not None:
                 self.ray_changes.append(self._ray_change)
         self._ray_change = None
+
+    def _kept_still(self, point: np.ndarray) -> bool:
+        """Whether, with ``point``, the tracked thing has kept still over the last
+        ``still_seconds`` (seen in most of those frames)."""
+        p = self.params
+        window = int(round(p.still_seconds * p.acquisition.fps))
+        recent = [q for f, q in self._valid_points if self.frame - f < window] + [point]
+        if len(recent) < 0.8 * window:
+            return False
+        recent = np.array(recent)
+        spread = np.linalg.norm(recent - np.median(recent, axis=0), axis=1)
+        return float(np.percentile(spread, 90)) < p.still_travel
+
+    def _forget_track(self, point: np.ndarray) -> None:
+        """The tracker followed a still thing: remember it as one and search for the sponge
+        anew (where it has been wiping is unknown again)."""
+        self.candidates.static[-1 - len(self.candidates.static)] = (point.copy(), self.size)
+        self.history.clear()
+        self._valid_points.clear()
+        self._last_seen = None
+        self.failures = self.params.coast_frames
 
     def _fail(self, rays, areas, stereo, reason: str) -> RegionEstimate:
         self.failures += 1
