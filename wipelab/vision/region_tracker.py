@@ -242,6 +242,7 @@ class RegionTracker:
         self.valid_count = 0
         self.frames_with_candidates = 0  # before identification: frames showing the colour
         self._stereo_points: deque[np.ndarray] = deque(maxlen=900)
+        self._statistics: dict[str, tuple] = {}
         self._valid_points: deque[tuple[int, np.ndarray]] = deque(maxlen=600)  # (frame, point)
         self._last_seen: np.ndarray | None = None
         self._plane: Plane | None = None
@@ -547,7 +548,7 @@ class RegionTracker:
         self._learn_area_range(problems, rays, metric_areas)
         for k in range(2):
             if not problems[k] and len(self.areas[k]) >= 5:
-                low, median, high = np.percentile(self.areas[k], [2, 50, 98])
+                low, median, high = self._area_range(k)
                 ratio = metric_areas[k] / median
                 lowest = max(p.area_floor, min(p.min_area_ratio, (1 - p.area_margin) * low / median))
                 highest = min(p.area_ceiling, max(p.max_area_ratio,
@@ -645,11 +646,34 @@ class RegionTracker:
         if any(problems) or len(self.areas[0]) < 5 or self._disagreement(rays):
             return
         for k in range(2):
-            ratio = metric_areas[k] / np.median(self.areas[k])
+            ratio = metric_areas[k] / self._area_range(k)[1]
             if not p.area_floor <= ratio <= p.area_ceiling:
                 return
         for k in range(2):
             self.areas[k].append(metric_areas[k])
+
+    def _cached(self, key: str, count: int, compute):
+        """``compute()``, recomputed every frame while its data (``count`` values) are few,
+        then on every 10th frame (these statistics change slowly; the percentiles cost more
+        than the rest of a frame's checks)."""
+        cached = self._statistics.get(key)
+        if cached is None or count < 30 or cached[0] != self.frame // 10:
+            cached = (self.frame // 10, compute())
+            self._statistics[key] = cached
+        return cached[1]
+
+    def _area_range(self, k: int) -> np.ndarray:
+        """2nd, 50th and 98th percentile (3,) of camera k's recent region areas."""
+        return self._cached(f"area{k}", len(self.areas[k]),
+                            lambda: np.percentile(self.areas[k], [2, 50, 98]))
+
+    def _ray_statistics(self) -> tuple[np.ndarray, float | None]:
+        """The usual offset (3,) between the two cameras' points on the plane and the 98th
+        percentile of its changes (None before 30 are known)."""
+        return self._cached("rays", len(self.ray_changes), lambda: (
+            np.median(np.array(self.ray_offsets), axis=0),
+            float(np.percentile(self.ray_changes, 98)) if len(self.ray_changes) >= 30
+            else None))
 
     def _disagreement(self, rays: np.ndarray) -> str:
         """Why the two cameras' regions cannot show the same sponge ("" if they can): where
@@ -659,12 +683,11 @@ class RegionTracker:
         if plane is None or len(self.ray_offsets) < 5:
             return ""
         p = self.params
-        typical = np.median(np.array(self.ray_offsets), axis=0)
+        typical, usual_change = self._ray_statistics()
         change = np.linalg.norm(self._ray_offset(plane, rays) - typical) / self.size
         limit = p.max_ray_disagreement
-        if len(self.ray_changes) >= 30:
-            limit = min(p.ray_disagreement_ceiling,
-                        max(limit, 1.5 * float(np.percentile(self.ray_changes, 98))))
+        if usual_change is not None:
+            limit = min(p.ray_disagreement_ceiling, max(limit, 1.5 * usual_change))
         if change > limit:
             return "the cameras' regions disagree"
         self._ray_change = change
@@ -677,7 +700,7 @@ class RegionTracker:
         p = self.params
         if not self.history or self.history[-1][0] != self.frame - 1 or len(self.areas[k]) < 5:
             return False
-        ratio = metric_area / np.median(self.areas[k])
+        ratio = metric_area / self._area_range(k)[1]
         return p.min_area_ratio <= ratio <= p.max_area_ratio
 
     def _locate_mono(self, k: int, ray: np.ndarray) -> np.ndarray | None:
@@ -688,7 +711,7 @@ class RegionTracker:
             return None
         view = self.views[k]
         point = plane.intersect(view.eye[None], (view.R.T @ ray)[None])[0]
-        half = 0.5 * np.median(np.array(self.ray_offsets), axis=0)
+        half = 0.5 * self._ray_statistics()[0]
         return point + half if k == 0 else point - half
 
     def _ray_offset(self, plane: Plane, rays: np.ndarray) -> np.ndarray:

@@ -22,7 +22,7 @@ DEPTH_RANGE = (0.6, 1.8)
 #: Most disparity levels searched (the images are scaled down to fit).
 MAX_DISPARITIES = 96
 #: Fewest table points for a plane, and the most a plane is fitted to.
-MIN_POINTS, MAX_POINTS = 500, 40000
+MIN_POINTS, MAX_POINTS = 500, 20000
 
 
 class TableStereo:
@@ -127,11 +127,11 @@ class TableStereo:
 
 
 def ransac_plane(points: np.ndarray, tolerance: float, rng: np.random.Generator,
-                 trials: int = 200) -> np.ndarray:
+                 trials: int = 100) -> np.ndarray:
     """Inliers (bool (n,)) of the plane through three of ``points`` (n, 3) that has the most
     points within ``tolerance`` metres."""
-    sample = points if len(points) <= 20000 else points[rng.choice(len(points), 20000,
-                                                                    replace=False)]
+    sample = points if len(points) <= 5000 else points[rng.choice(len(points), 5000,
+                                                                   replace=False)]
     best_count, best_plane = 0, None
     for _ in range(trials):
         a, b, c = sample[rng.choice(len(sample), 3, replace=False)]
