@@ -3,10 +3,10 @@
 Both movements are normalised to the demonstration area (Fig. 3; the hand's through the
 placement that put the demonstration in front of the robot) and sampled at the frame times:
 
-* lag: the delay tau (s) that best aligns the hand with the demonstration over the second
-  half of the imitation (least squares, tau on a grid of a quarter frame from -1/4 to +1/2
-  period; the paper reports about 0.2 s between the demonstration and the learned waveform,
-  Fig. 5);
+* lag: the delay tau (s) that best aligns the hand with the demonstration from a period
+  after the lock to the end of the imitation (from the lock if that holds too few tracked
+  frames; least squares, tau on a grid of a quarter frame from -1/4 to +1/2 period; the
+  paper reports about 0.2 s between the demonstration and the learned waveform, Fig. 5);
 * the error at time t: the RMS over the next period of hand(t') - demonstration(t' - tau)
   (both DOFs), as a fraction of the demonstration's mean peak-to-peak;
 * the hand follows from the first frame from which the error stays within
@@ -63,16 +63,20 @@ def following_metrics(t: np.ndarray, demo: np.ndarray, hand: np.ndarray, frequen
     period = 1.0 / frequency_hz
     dt = float(np.median(np.diff(t)))
     late = (t >= 0.5 * (lock_time + end_time)) & (t <= end_time)
+    tracked = np.isfinite(demo).all(axis=1)
+    fitted = (t >= lock_time + period) & (t <= end_time)
+    if (fitted & tracked).sum() < 10:
+        fitted = (t >= lock_time) & (t <= end_time)
     lags = np.arange(-0.25 * period, 0.5 * period, 0.25 * dt)
     costs = []
     for tau in lags:
         aligned = shifted(t, demo, tau)
-        both = late & np.isfinite(aligned).all(axis=1)
+        both = fitted & np.isfinite(aligned).all(axis=1)
         costs.append(np.mean((hand[both] - aligned[both]) ** 2) if both.sum() > 5 else np.inf)
     tau = float(lags[int(np.argmin(costs))])
     aligned = shifted(t, demo, tau)
     during = (t >= lock_time) & (t <= end_time)
-    observed = np.isfinite(demo).all(axis=1) & during
+    observed = tracked & during
     span = float(np.mean(np.ptp(demo[observed], axis=0))) if observed.sum() > 2 else math.nan
     squared = np.sum((hand - aligned) ** 2, axis=1) / hand.shape[1]
     usable = np.isfinite(squared) & during

@@ -106,7 +106,8 @@ def run_live(source: LiveSource, out_dir: str | os.PathLike, params: LiveParams 
         raise
     try:
         tracker = SpongeTracker(opened.calibration, colour, TrackerParams(
-            particles=params.track.particles, seed=params.track.seed, sponge=sponge))
+            particles=params.track.particles, seed=params.track.seed, sponge=sponge,
+            fps=opened.feed.fps))
         parameters = json_parameters(params) | {"source": source.describe(),
                                                 "colour_source": colour.option}
         with staged_output(out_dir) as tmp:

@@ -27,7 +27,7 @@ import os
 import sys
 import tempfile
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import cv2
@@ -98,7 +98,7 @@ class TrackParams:
     sponge_size: tuple[float, float, float] | None = None
     area_window: tuple[float, float] = (0.0, 10.0)
     logged_particles: int = 40
-    warmup: float = 6.0
+    warmup: float = 3.0
 
 
 @dataclass
@@ -234,22 +234,39 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
             raise InputError(f"--roi: region {x},{y},{w},{h} does not fit in the "
                              f"{width}x{height} frames")
     tracker_params = TrackerParams(particles=params.particles, seed=params.seed,
-                                   sponge=sponge_box(params, demo.metadata, toml_name))
+                                   sponge=sponge_box(params, demo.metadata, toml_name),
+                                   fps=demo.reader.fps)
     tracker = SpongeTracker(demo.calibration, colour, tracker_params)
-    result = run_tracker(tracker, demo.reader, params, quiet)
-    if result is None and not tracker.region.frames_with_candidates:
-        raise InputError(f"{colour.option}: this colour never shows in both {demo.left} and "
-                         f"{demo.right}; give the sponge's colour with --color, --hsv or --roi")
-    if result is None:
-        raise InputError(f"{demo.left}, {demo.right}: nothing of this colour ({colour.option}) "
-                         "moves like a wiping sponge in both cameras; give the sponge's colour "
-                         "with --color, --hsv or --roi")
+    with tempfile.TemporaryDirectory(prefix="wipelab-track-") as workdir:
+        videos = LogVideos(demo, Path(workdir))
+        try:
+            result = run_tracker(tracker, demo.reader, params, quiet, frame_sink=videos.write)
+        finally:
+            videos.close()
+        if result is None and not tracker.region.frames_with_candidates:
+            raise InputError(f"{colour.option}: this colour never shows in both {demo.left} "
+                             f"and {demo.right}; give the sponge's colour with --color, --hsv "
+                             "or --roi")
+        if result is None:
+            raise InputError(f"{demo.left}, {demo.right}: nothing of this colour "
+                             f"({colour.option}) moves like a wiping sponge in both cameras; "
+                             "give the sponge's colour with --color, --hsv or --roi")
+        _write_outputs(demo, out_dir, params, colour, tracker, tracker_params, result, videos,
+                       quiet)
+    return result
+
+
+def _write_outputs(demo: Demo, out_dir, params: TrackParams, colour: ColourSource,
+                   tracker: SpongeTracker, tracker_params: TrackerParams, result: TrackResult,
+                   videos: LogVideos, quiet: bool) -> None:
+    """track.csv, track.mcap, track.rrd and manifest.json of a run (all or nothing)."""
     sponge = tracker_params.sponge
     parameters = asdict(params) | {"colour_source": colour.option,
                                    "sponge": None if sponge is None else asdict(sponge)}
     inputs = {"left_video": demo.left, "right_video": demo.right,
               "calibration": demo.calibration_path}
-    scene = TrackScene(demo.calibration, "world" if result.frame == "world" else LEFT_FRAME,
+    scene = TrackScene(videos.calibration(demo.calibration),
+                       "world" if result.frame == "world" else LEFT_FRAME,
                        tracked_table_axes(tracker), result.sponge_size, result.region_size)
     blueprint = track_blueprint(scene, result.area,
                                 float(np.nanmean(result.poses[result.valid, 2])))
@@ -259,22 +276,23 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
                                              result.normalised))
         with StageRecorder(tmp, "track", parameters, inputs, blueprint,
                            attachments={"calibration.yaml": demo.calibration_path}) as rec:
-            log_track(rec, demo, result, scene, quiet)
+            log_track(rec, videos.paths, result, scene, quiet)
         write_json(tmp / "manifest.json", build_manifest("track", inputs, parameters,
                                                          params.seed))
-    return result
 
 
 def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: TrackParams,
                 quiet: bool = False,
-                on_frame: Callable[[int, FrameEstimate], None] | None = None
+                on_frame: Callable[[int, FrameEstimate], None] | None = None,
+                frame_sink: Callable[[np.ndarray, np.ndarray], None] | None = None
                 ) -> TrackResult | None:
     """Run ``tracker`` over every frame pair of ``reader``; None if no frame was valid.
 
     Two passes: a warm-up over the first ``params.warmup`` seconds (longer until the sponge
     is found and the plane it moves in is known), then, with what it learnt, the tracking
     pass from the first frame (so that the first seconds are tracked too). ``on_frame`` is
-    called with each frame's index and estimate of the tracking pass.
+    called with each frame's index and estimate of the tracking pass, ``frame_sink`` with
+    each of its frame pairs.
     """
     n = reader.frame_count
     poses = np.full((n, 4), np.nan)
@@ -284,19 +302,27 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
     m = params.logged_particles
     particles = np.full((n, m, 4), np.nan)
     least = int(round(params.warmup * reader.fps))
-    with tqdm(total=n, desc="track: finding the sponge", unit="frame", disable=quiet,
-              file=sys.stderr, leave=False) as bar:
-        for k, (left, right) in enumerate(reader):
-            tracker.step(left, right)
-            bar.update()
-            if k + 1 >= least and tracker.ready:
-                break
+    for attempt in range(2):
+        with tqdm(total=n, desc="track: finding the sponge", unit="frame", disable=quiet,
+                  file=sys.stderr, leave=False) as bar:
+            for k, (left, right) in enumerate(reader):
+                tracker.step(left, right)
+                bar.update()
+                if k + 1 >= least and tracker.ready:
+                    break
+        if tracker.identified:
+            break
+        # a video too short for the wiping to show as periodic motion: any motion will do
+        tracker.accept_any_motion()
+        tracker.restart()
     if not tracker.identified:
         return None
     tracker.restart()
     with tqdm(total=n, desc="track", unit="frame", disable=quiet, file=sys.stderr,
               leave=False) as bar:
         for k, (left, right) in enumerate(reader):
+            if frame_sink is not None:
+                frame_sink(left, right)
             estimate = tracker.step(left, right)
             poses[k], valid[k], quality[k] = estimate.pose, estimate.valid, estimate.quality
             areas[k] = estimate.areas
@@ -462,27 +488,65 @@ def _quaternion_xyzw(R: np.ndarray) -> np.ndarray:
     return q / np.linalg.norm(q)
 
 
-def _video_for_logs(path: Path, fps: float, size: tuple[int, int], workdir: Path) -> Path:
-    """``path`` itself if Rerun can play it (H.264/H.265/AV1 without B-frames), else an H.264
-    copy in ``workdir``."""
+#: Widest video written for the logs when the demo's own videos cannot be logged as they are.
+PREVIEW_WIDTH = 640
+
+
+def playable(path: Path) -> bool:
+    """Whether the Rerun viewer (and Foxglove) can play a video file as it is: H.264, H.265
+    or AV1 without B-frames."""
     import av
 
     with av.open(str(path)) as container:
-        stream = container.streams.video[0]
-        playable = stream.codec_context.name in ("h264", "hevc", "av1") and \
-            not stream.codec_context.has_b_frames
-    if playable:
-        return path
-    copy = workdir / path.name
-    capture = cv2.VideoCapture(str(path), cv2.CAP_FFMPEG)
-    with H264Writer(copy, int(round(fps)), size) as writer:
-        while True:
-            ok, frame = capture.read()
-            if not ok:
-                break
+        context = container.streams.video[0].codec_context
+        return context.name in ("h264", "hevc", "av1") and not context.has_b_frames
+
+
+class LogVideos:
+    """The two videos the logs show: the demo's own when they can be played as they are,
+    else H.264 previews (at most :data:`PREVIEW_WIDTH` wide, fast x264 settings) written from
+    the frames of the tracking pass, so that nothing is decoded twice.
+
+    Parameters
+    ----------
+    demo : Demo
+    workdir : Path
+        Where previews are written.
+    """
+
+    def __init__(self, demo: Demo, workdir: Path):
+        width, height = demo.calibration.image_size
+        self.paths = [demo.left, demo.right]
+        self.scale = 1.0
+        self._writers = []
+        if playable(demo.left) and playable(demo.right):
+            return
+        factor = max(1, int(np.ceil(width / PREVIEW_WIDTH)))
+        self.scale = 1.0 / factor
+        self.size = (width // factor // 2 * 2, height // factor // 2 * 2)  # x264: even sides
+        self.paths = [workdir / "left.mp4", workdir / "right.mp4"]
+        self._writers = [H264Writer(path, int(round(demo.reader.fps)), self.size, crf=23,
+                                    preset="ultrafast") for path in self.paths]
+
+    def write(self, left: np.ndarray, right: np.ndarray) -> None:
+        """One frame pair of the tracking pass (BGR uint8, full resolution)."""
+        for writer, frame in zip(self._writers, (left, right)):
+            if self.scale < 1.0:  # a preview: linear is enough, and a few times faster
+                frame = cv2.resize(frame, self.size, interpolation=cv2.INTER_LINEAR)
             writer.write(frame)
-    capture.release()
-    return copy
+
+    def close(self) -> None:
+        for writer in self._writers:
+            writer.close()
+
+    def calibration(self, calibration: StereoCalibration) -> StereoCalibration:
+        """The calibration of the logged videos (the cameras' matrices and the image size
+        scaled with them; the lens distortion is in normalised coordinates and stays)."""
+        if self.scale == 1.0:
+            return calibration
+        S = np.diag([self.scale, self.scale, 1.0])
+        return replace(calibration, image_size=self.size, K1=S @ calibration.K1,
+                       K2=S @ calibration.K2)
 
 
 def log_track_setup(rec: StageRecorder, scene: TrackScene) -> None:
@@ -540,17 +604,14 @@ def log_track_frame(rec: StageRecorder, scene: TrackScene, index: int, t: float,
                           points[np.isfinite(points).all(axis=1)], colour, PARTICLE_COLOUR)
 
 
-def log_track(rec: StageRecorder, demo: Demo, result: TrackResult, scene: TrackScene,
+def log_track(rec: StageRecorder, videos: list[Path], result: TrackResult, scene: TrackScene,
               quiet: bool = True) -> None:
-    """Write the run into the MCAP and Rerun recordings of ``rec``."""
-    calibration = demo.calibration
-    width, height = calibration.image_size
+    """Write the run into the MCAP and Rerun recordings of ``rec``; ``videos`` the left and
+    right video files to log (``scene.calibration`` is theirs)."""
     log_track_setup(rec, scene)
-    with tempfile.TemporaryDirectory(prefix="wipelab-track-") as workdir:
-        for side, path, frame_id in (("left", demo.left, LEFT_FRAME),
-                                     ("right", demo.right, RIGHT_FRAME)):
-            video = _video_for_logs(path, demo.reader.fps, (width, height), Path(workdir))
-            rec.video(f"/stereo/{side}/video", video, result.t, frame_id=frame_id)
+    for side, video, frame_id in (("left", videos[0], LEFT_FRAME),
+                                  ("right", videos[1], RIGHT_FRAME)):
+        rec.video(f"/stereo/{side}/video", video, result.t, frame_id=frame_id)
 
     t, valid = result.t, result.valid
     rec.scalars("/track/position", t[valid], result.poses[valid, :3], names=["x", "y", "z"],

@@ -233,6 +233,35 @@ class CandidateTrack:
         return float(min(per_camera)) * depth
 
 
+    def periodicity(self, frame: int, window: int, lags: tuple[int, int]) -> float:
+        """How periodically it moved over the last ``window`` frames: the largest normalised
+        autocorrelation, at lags (frames) within ``lags``, of its motion along the main
+        direction of its motion in the left image (0 when too few frames were seen)."""
+        window = max(1, min(window, frame - self.first_frame + 1))  # a younger track
+        series = np.full(window, np.nan)
+        for f, r in zip(self.frames, self.rays):
+            if frame - f < window:
+                series[window - 1 - (frame - f)] = 0.0
+        seen = np.isfinite(series)
+        if seen.sum() < 0.6 * window or window < 2 * lags[0]:
+            return 0.0
+        rays = np.array([r[0, :2] for f, r in zip(self.frames, self.rays) if frame - f < window])
+        rays = rays - rays.mean(axis=0)
+        _, _, axes = np.linalg.svd(rays, full_matrices=False)
+        series[seen] = rays @ axes[0]
+        best = 0.0
+        for lag in range(lags[0], min(lags[1], window // 2) + 1):
+            a, b = series[:-lag], series[lag:]
+            both = np.isfinite(a) & np.isfinite(b)
+            if both.sum() < lags[0]:
+                continue
+            a, b = a[both] - a[both].mean(), b[both] - b[both].mean()
+            norm = np.sqrt((a @ a) * (b @ b))
+            if norm > 0:
+                best = max(best, float(a @ b / norm))
+        return best
+
+
 @dataclass(frozen=True)
 class AcquisitionParams:
     """Rules for telling the sponge from other things of its colour.
@@ -255,6 +284,19 @@ class AcquisitionParams:
         (plus ``gate_floor``).
     gate_floor : float
         Metres.
+    max_size_variation : float
+        Largest coefficient of variation of a moving object's size over the window: a sponge
+        keeps its size as it moves, a still thing that an arm passing over half hides seems
+        to move while it shrinks and grows.
+    fps : float
+        Frame rate of the video, frames per second.
+    periods : tuple of float
+        Shortest and longest period of a wiping movement, seconds.
+    min_periodicity : float
+        A moving object must move periodically: the largest autocorrelation of its motion
+        in the images over lags within ``periods``, over the last ``1.5 * periods[1]``
+        seconds, must reach this (a wiping sponge comes back where it was; a still thing
+        that an arm passes over moves once).
     """
 
     window: int = 45
@@ -264,6 +306,10 @@ class AcquisitionParams:
     static_frames: int = 60
     gate: float = 1.0
     gate_floor: float = 0.05
+    max_size_variation: float = 0.25
+    fps: float = 30.0
+    periods: tuple[float, float] = (0.3, 2.2)
+    min_periodicity: float = 0.5
 
 
 class CandidateTracks:
@@ -336,7 +382,14 @@ class CandidateTracks:
             seen = sum(1 for f in track.frames if frame - f < p.window)
             if seen < p.min_presence:
                 continue
+            sizes = np.array([s for f, s in zip(track.frames, track.sizes)
+                              if frame - f < p.window])
+            if sizes.std() > p.max_size_variation * sizes.mean():
+                continue
             travel = track.travel(frame, p.window)
-            if travel >= best_travel:
+            if travel < best_travel:
+                continue
+            lags = (max(2, int(round(p.periods[0] * p.fps))), int(round(p.periods[1] * p.fps)))
+            if track.periodicity(frame, int(1.5 * lags[1]), lags) >= p.min_periodicity:
                 best, best_travel = track, travel
         return best

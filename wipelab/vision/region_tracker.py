@@ -42,6 +42,8 @@ from wipelab.vision.table_stereo import TableStereo
 from wipelab.vision.undistortion import Undistorter
 
 QUALITY_NONE, QUALITY_CENTROID, QUALITY_MONO, QUALITY_BOX = "", "centroid", "mono", "box"
+#: Length of the largest kitchen sponge (its visible area is under this squared), metres.
+LARGEST_SPONGE = 0.16
 
 
 @dataclass(frozen=True)
@@ -91,6 +93,10 @@ class RegionTrackerParams:
     max_height : float
         A moving thing of the sponge's colour whose centre keeps higher than this above the
         table is not the sponge (a hand or sleeve of a near colour), metres.
+    still_seconds, still_travel : float
+        A tracked thing that moves less than ``still_travel`` metres (90th percentile of its
+        distances from their median) over ``still_seconds`` is a still thing the tracker went
+        to, not a wiping sponge: it is remembered as still and the sponge searched again.
     """
 
     search_width: int = 320
@@ -111,6 +117,8 @@ class RegionTrackerParams:
     table_every: int = 15
     table_radius: float = 0.5
     max_height: float = 0.08
+    still_seconds: float = 3.0
+    still_travel: float = 0.01
 
 
 @dataclass
@@ -243,7 +251,8 @@ class RegionTracker:
         self.valid_count = 0
         self.frames_with_candidates = 0  # before identification: frames showing the colour
         self._stereo_points: deque[np.ndarray] = deque(maxlen=900)
-        self._valid_points: deque[np.ndarray] = deque(maxlen=600)  # the last 20 s at 30 Hz
+        self._statistics: dict[str, tuple] = {}
+        self._valid_points: deque[tuple[int, np.ndarray]] = deque(maxlen=600)  # (frame, point)
         self._last_seen: np.ndarray | None = None
         self._plane: Plane | None = None
         # the sponge's pixels in both cameras when it was identified (window images, 0/255
@@ -252,7 +261,8 @@ class RegionTracker:
         self.seed_masks: list[np.ndarray] = []
         # before the sponge is known: per camera, the last frames in the background's
         # pixels and where they show the colour (to find still things of the colour)
-        window = params.acquisition.window
+        acquisition = params.acquisition
+        window = max(acquisition.window, int(1.5 * acquisition.periods[1] * acquisition.fps) + 1)
         self._recent = [deque(maxlen=window), deque(maxlen=window)]
 
     # ----------------------------------------------------------------- public
@@ -269,6 +279,8 @@ class RegionTracker:
         self.history.clear()
         self.failures = self.params.coast_frames + 1
         self.candidates.tracks.clear()
+        for recent in self._recent:
+            recent.clear()
         self._last_seen = None  # the pass starts where the video starts, not where it ended
 
     def observe(self, point: np.ndarray) -> None:
@@ -279,7 +291,7 @@ class RegionTracker:
         point = np.asarray(point, dtype=np.float64).copy()
         self.history.append((self.frame, point))
         self._last_seen = point
-        self._valid_points.append(point)
+        self._valid_points.append((self.frame, point))
         self.failures = 0
 
     def step(self, left: np.ndarray, right: np.ndarray) -> RegionEstimate:
@@ -358,49 +370,57 @@ class RegionTracker:
         if len(self._recent[0]) < self.params.acquisition.window // 2:
             return False  # too few frames yet to tell still from moving
         path = track.recent(self.frame, self.params.acquisition.window)
-        sponge_size = float(np.percentile(list(track.sizes)[-len(path):], 10))
         for view, background, recent in zip(self.views, self.backgrounds, self._recent):
             background.initialise(np.stack([image for _, image, _ in recent]),
                                   np.stack([positive for _, _, positive in recent]))
             # a sponge wiping a path smaller than itself is not a still thing of its colour
             pixels = np.array([view.pixel(point) for point in path])
-            depth = float(np.median([view.depth(point) for point in path]))
-            background.release(pixels, (1.5 * sponge_size * view.focal / depth) ** 2)
-        # follow the candidates of the last frames again, without what stayed still
-        cleaned = CandidateTracks(self.params.acquisition)
-        for (frame, left, _), (_, right, _) in zip(*self._recent):
-            cleaned.update(frame, self._search_candidates(None, self.prior, [left, right]))
-        moving = cleaned.moving(self.frame)
-        if moving is None or np.linalg.norm(moving.last_point - track.last_point) > \
-                max(track.size, 0.05):
+            per_metre = view.focal / float(np.median([view.depth(point) for point in path]))
+            background.release(pixels, (LARGEST_SPONGE * per_metre) ** 2,
+                               0.25 * LARGEST_SPONGE * per_metre)
+        if self._above_the_table(frames, track):
+            self.candidates.rejected.add(track.ident)
+            return False
+        # the candidate's region again, without what stayed still: nothing left means it
+        # was a still thing that the sponge (or an arm) touched
+        self.size, self.model = track.size, self.prior
+        rays, areas = [], []
+        for view, frame, background in zip(self.views, frames, self.backgrounds):
+            region = self._region(view, frame, track.last_point, 0.02, background)
+            if region is None:
+                break
+            rays.append(region[0])
+            areas.append(region[1] * (view.depth(track.last_point) / view.focal) ** 2)
+        if len(rays) < 2:
             self.candidates.static[track.ident] = (track.last_point.copy(), track.size)
             self.candidates.tracks = [t for t in self.candidates.tracks if t is not track]
-            return False
-        if self._above_the_table(frames, moving):
-            self.candidates.rejected.add(track.ident)
+            self.size = self.model = None
             return False
         for recent in self._recent:
             recent.clear()
-        point, self.size = moving.last_point, moving.size
-        masks, windows = [], []
+        point = triangulate_rays(rays[0][None], rays[1][None], self.calibration.R,
+                                 self.calibration.T)[0][0]
+        self.size = float(np.sqrt(np.mean(areas)))
+        masks, cores, windows = [], [], []
         for view, frame, background in zip(self.views, frames, self.backgrounds):
             window, origin, _ = self._window(view, frame, point, 1.5 * self.size)
             probability = self.prior.back_project(window)
-            still = background.still_colour(window, origin, 1)
-            if still is not None:
-                probability[still] = 0.0
             centre = view.pixel(point) - origin
             reach = 0.8 * self.size * view.focal / view.depth(point)
             blobs = [b for b in find_blobs(probability, min_area=4)
                      if np.linalg.norm(b.centroid - centre) < reach + b.radius]
-            mask = np.zeros(window.shape[:2], np.uint8)
+            region = blob_mask(probability, blobs, grow=0)
+            masks.append(region.astype(np.uint8) * 255)
             # the sponge's colour is learnt from the pixels well inside the named colour only:
             # the soft edge of the prior may take in a hand of a near hue
-            mask[blob_mask(probability, blobs, grow=0) & (probability > 0.99)] = 255
-            masks.append(mask)
+            cores.append((region & (probability > 0.99)).astype(np.uint8) * 255)
             windows.append(window)
-        self.model = ColourModel.fit(windows, masks) if all(m.any() for m in masks) \
-            else self.prior
+        if all(core.any() for core in cores):
+            self.model = ColourModel.fit(windows, cores)
+        elif all(mask.any() for mask in masks):
+            self.model = ColourModel.fit(windows, masks)
+        else:
+            self.model = self.prior
         self.history.append((self.frame - 1, point.copy()))
         self.seed_windows, self.seed_masks = windows, masks
         self._table_centre = point.copy()
@@ -446,7 +466,7 @@ class RegionTracker:
         sponge's size and a margin (None before any valid point)."""
         if not self._valid_points:
             return None, 0.0
-        points = np.array(self._valid_points)
+        points = np.array([point for _, point in self._valid_points])
         centre = np.median(points, axis=0)
         spread = float(np.percentile(np.linalg.norm(points - centre, axis=1), 98))
         return centre, spread + self.size + 0.05
@@ -540,7 +560,7 @@ class RegionTracker:
         self._learn_area_range(problems, rays, metric_areas)
         for k in range(2):
             if not problems[k] and len(self.areas[k]) >= 5:
-                low, median, high = np.percentile(self.areas[k], [2, 50, 98])
+                low, median, high = self._area_range(k)
                 ratio = metric_areas[k] / median
                 lowest = max(p.area_floor, min(p.min_area_ratio, (1 - p.area_margin) * low / median))
                 highest = min(p.area_ceiling, max(p.max_area_ratio,
@@ -567,6 +587,10 @@ class RegionTracker:
                 point, reason = None, reason + "; the one camera's region jumped"
         if point is None:
             return self._fail(rays, areas, stereo, reason or "no plane yet for one camera")
+        if self._kept_still(point):
+            self._forget_track(point)
+            return self._fail(rays, areas, stereo, "what was tracked has not moved for "
+                              f"{p.still_seconds:g} s: a still thing, not the sponge")
         self._accept(frames, point, rays, metric_areas, stereo, good)
         if self.frame % p.background_every == 0:
             self._update_backgrounds(frames, masks)
@@ -660,11 +684,34 @@ class RegionTracker:
         if any(problems) or len(self.areas[0]) < 5 or self._disagreement(rays):
             return
         for k in range(2):
-            ratio = metric_areas[k] / np.median(self.areas[k])
+            ratio = metric_areas[k] / self._area_range(k)[1]
             if not p.area_floor <= ratio <= p.area_ceiling:
                 return
         for k in range(2):
             self.areas[k].append(metric_areas[k])
+
+    def _cached(self, key: str, count: int, compute):
+        """``compute()``, recomputed every frame while its data (``count`` values) are few,
+        then on every 10th frame (these statistics change slowly; the percentiles cost more
+        than the rest of a frame's checks)."""
+        cached = self._statistics.get(key)
+        if cached is None or count < 30 or cached[0] != self.frame // 10:
+            cached = (self.frame // 10, compute())
+            self._statistics[key] = cached
+        return cached[1]
+
+    def _area_range(self, k: int) -> np.ndarray:
+        """2nd, 50th and 98th percentile (3,) of camera k's recent region areas."""
+        return self._cached(f"area{k}", len(self.areas[k]),
+                            lambda: np.percentile(self.areas[k], [2, 50, 98]))
+
+    def _ray_statistics(self) -> tuple[np.ndarray, float | None]:
+        """The usual offset (3,) between the two cameras' points on the plane and the 98th
+        percentile of its changes (None before 30 are known)."""
+        return self._cached("rays", len(self.ray_changes), lambda: (
+            np.median(np.array(self.ray_offsets), axis=0),
+            float(np.percentile(self.ray_changes, 98)) if len(self.ray_changes) >= 30
+            else None))
 
     def _disagreement(self, rays: np.ndarray) -> str:
         """Why the two cameras' regions cannot show the same sponge ("" if they can): where
@@ -674,12 +721,11 @@ class RegionTracker:
         if plane is None or len(self.ray_offsets) < 5:
             return ""
         p = self.params
-        typical = np.median(np.array(self.ray_offsets), axis=0)
+        typical, usual_change = self._ray_statistics()
         change = np.linalg.norm(self._ray_offset(plane, rays) - typical) / self.size
         limit = p.max_ray_disagreement
-        if len(self.ray_changes) >= 30:
-            limit = min(p.ray_disagreement_ceiling,
-                        max(limit, 1.5 * float(np.percentile(self.ray_changes, 98))))
+        if usual_change is not None:
+            limit = min(p.ray_disagreement_ceiling, max(limit, 1.5 * usual_change))
         if change > limit:
             return "the cameras' regions disagree"
         self._ray_change = change
@@ -692,7 +738,7 @@ class RegionTracker:
         p = self.params
         if not self.history or self.history[-1][0] != self.frame - 1 or len(self.areas[k]) < 5:
             return False
-        ratio = metric_area / np.median(self.areas[k])
+        ratio = metric_area / self._area_range(k)[1]
         return p.min_area_ratio <= ratio <= p.max_area_ratio
 
     def _locate_mono(self, k: int, ray: np.ndarray) -> np.ndarray | None:
@@ -703,7 +749,7 @@ class RegionTracker:
             return None
         view = self.views[k]
         point = plane.intersect(view.eye[None], (view.R.T @ ray)[None])[0]
-        half = 0.5 * np.median(np.array(self.ray_offsets), axis=0)
+        half = 0.5 * self._ray_statistics()[0]
         return point + half if k == 0 else point - half
 
     def _ray_offset(self, plane: Plane, rays: np.ndarray) -> np.ndarray:
@@ -715,10 +761,10 @@ class RegionTracker:
     def _accept(self, frames, point, rays, areas, stereo, good) -> None:
         self.history.append((self.frame, point.copy()))
         self._last_seen = point.copy()
-        self._valid_points.append(point.copy())
+        self._valid_points.append((self.frame, point.copy()))
         # a "still thing" where the sponge is now was the sponge resting before it moved
         for ident, (centre, _) in list(self.candidates.static.items()):
-            if np.linalg.norm(centre - point) < 0.5 * self.size:
+            if ident >= 0 and np.linalg.norm(centre - point) < 0.5 * self.size:
                 del self.candidates.static[ident]
         self.failures = 0
         self.valid_count += 1
@@ -742,6 +788,27 @@ class RegionTracker:
             if self._ray_change is not None:
                 self.ray_changes.append(self._ray_change)
         self._ray_change = None
+
+    def _kept_still(self, point: np.ndarray) -> bool:
+        """Whether, with ``point``, the tracked thing has kept still over the last
+        ``still_seconds`` (seen in most of those frames)."""
+        p = self.params
+        window = int(round(p.still_seconds * p.acquisition.fps))
+        recent = [q for f, q in self._valid_points if self.frame - f < window] + [point]
+        if len(recent) < 0.8 * window:
+            return False
+        recent = np.array(recent)
+        spread = np.linalg.norm(recent - np.median(recent, axis=0), axis=1)
+        return float(np.percentile(spread, 90)) < p.still_travel
+
+    def _forget_track(self, point: np.ndarray) -> None:
+        """The tracker followed a still thing: remember it as one and search for the sponge
+        anew (where it has been wiping is unknown again)."""
+        self.candidates.static[-1 - len(self.candidates.static)] = (point.copy(), self.size)
+        self.history.clear()
+        self._valid_points.clear()
+        self._last_seen = None
+        self.failures = self.params.coast_frames
 
     def _fail(self, rays, areas, stereo, reason: str) -> RegionEstimate:
         self.failures += 1

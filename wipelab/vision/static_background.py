@@ -104,20 +104,35 @@ class StaticBackground:
         """
         small = self.canvas_image(frame)
         weight = self.rate * self.in_frame
+        under = np.zeros(weight.shape, np.uint8)
         for mask, origin, step in keep_out:
             x0, y0, x1, y1 = self._bounds(origin, mask.shape, step)
             if x1 > x0 and y1 > y0:
                 inside = cv2.resize(mask.astype(np.uint8), (x1 - x0, y1 - y0),
                                     interpolation=cv2.INTER_AREA)
-                inside = cv2.dilate(inside, np.ones((3, 3), np.uint8))
-                weight[y0:y1, x0:x1][inside > 0] = 0.0
+                under[y0:y1, x0:x1] |= cv2.dilate(inside, np.ones((3, 3), np.uint8))
+        weight[under > 0] = 0.0
         colour = (model.back_project(small) > 0.5).astype(np.float32)
         self.image += weight[..., None] * (small.astype(np.float32) - self.image)
         self.colour += weight * (colour - self.colour)
         self.seen += weight * (1.0 - self.seen)
         self.updates += 1
         self.still = ((self.seen > 0.3) & (self.colour > 0.5 * self.seen)).astype(np.uint8)
+        self._forget_ghosts(under)
         self._mean = None
+
+    def _forget_ghosts(self, under: np.ndarray) -> None:
+        """A still thing that lies (nine tenths of it) under the sponge now is the sponge
+        itself, mistaken for one while it rested or wiped a path smaller than itself: forget
+        it. A cloth or a plate the sponge is on reaches beyond it."""
+        if not (self.still & under).any():
+            return
+        count, labels, stats, _ = cv2.connectedComponentsWithStats(self.still, connectivity=8)
+        covered = np.bincount(labels[under > 0], minlength=count)
+        for label in range(1, count):
+            if covered[label] >= 0.9 * stats[label, cv2.CC_STAT_AREA]:
+                self.colour[labels == label] = 0.0
+        self.still = ((self.seen > 0.3) & (self.colour > 0.5 * self.seen)).astype(np.uint8)
 
     @property
     def mean(self) -> np.ndarray:
@@ -136,19 +151,24 @@ class StaticBackground:
         y1 = min(int(np.ceil((origin[1] + height * step) * self.scale)), self.size[1])
         return x0, y0, x1, y1
 
-    def release(self, canvas_points: np.ndarray, max_area: float) -> None:
-        """Forget the still things that hold one of ``canvas_points`` (n, 2; canvas pixels)
-        and cover at most ``max_area`` canvas pixels: a sponge wiping a path smaller than
-        itself keeps its middle covered and looks still there."""
-        count, labels, stats, _ = cv2.connectedComponentsWithStats(self.still, connectivity=8)
+    def release(self, canvas_points: np.ndarray, max_area: float, max_offset: float) -> None:
+        """Forget the still things that hold the middle of a path (``canvas_points`` (n, 2),
+        canvas pixels): at most ``max_area`` canvas pixels large and centred within
+        ``max_offset`` pixels of the points' median. A sponge wiping a path smaller than
+        itself keeps the path's middle covered and looks still there; a cloth the path
+        crosses is larger, or lies elsewhere."""
+        count, labels, stats, centroids = cv2.connectedComponentsWithStats(self.still,
+                                                                            connectivity=8)
         if count <= 1:
             return
-        pixels = np.round((np.asarray(canvas_points) + 0.5) * self.scale - 0.5).astype(int)
-        inside = (pixels[:, 0] >= 0) & (pixels[:, 1] >= 0) & (pixels[:, 0] < self.size[0]) \
-            & (pixels[:, 1] < self.size[1])
-        for label in set(labels[pixels[inside, 1], pixels[inside, 0]].tolist()) - {0}:
-            if stats[label, cv2.CC_STAT_AREA] <= max_area * self.scale ** 2:
-                self.colour[labels == label] = 0.0
+        middle = (np.median(np.asarray(canvas_points), axis=0) + 0.5) * self.scale - 0.5
+        x, y = np.round(middle).astype(int)
+        if not (0 <= x < self.size[0] and 0 <= y < self.size[1]):
+            return
+        label = labels[y, x]
+        if label and stats[label, cv2.CC_STAT_AREA] <= max_area * self.scale ** 2 and \
+                np.linalg.norm(centroids[label] - middle) <= max_offset * self.scale:
+            self.colour[labels == label] = 0.0
         self.still = ((self.seen > 0.3) & (self.colour > 0.5 * self.seen)).astype(np.uint8)
 
     def still_in_canvas_image(self, image: np.ndarray) -> np.ndarray | None:

@@ -22,7 +22,7 @@ distractor, a stale estimate or a guess during an occlusion is never valid.
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -57,6 +57,8 @@ class TrackerParams:
     region_every : int
         While the box fits, the region is measured on every n-th frame only (to keep the
         offset between the two up to date).
+    fps : float
+        Frame rate of the video (the sponge is told by its periodic motion).
     """
 
     particles: int = 100
@@ -64,6 +66,7 @@ class TrackerParams:
     sponge: SpongeBox | None = None
     region: RegionTrackerParams = field(default_factory=RegionTrackerParams)
     region_every: int = 5
+    fps: float = 30.0
 
     def __post_init__(self):
         if self.particles < 10:
@@ -117,7 +120,9 @@ class SpongeTracker:
                  params: TrackerParams = TrackerParams()):
         self.calibration = calibration
         self.params = params
-        self.region = RegionTracker(calibration, colour, params.region)
+        region = replace(params.region, acquisition=replace(params.region.acquisition,
+                                                              fps=params.fps))
+        self.region = RegionTracker(calibration, colour, region)
         self.box = None
         if params.sponge is not None:
             self.box = BoxTracker(calibration, BoxParams(particles=params.particles,
@@ -138,6 +143,15 @@ class SpongeTracker:
     def ready(self) -> bool:
         """Whether everything a second pass needs is known (sponge, plane of motion)."""
         return self.region.identified and self.region.sponge_plane() is not None
+
+    def accept_any_motion(self) -> None:
+        """Let a thing of the colour that moves, but not yet periodically, be the sponge:
+        for a video too short for periodic motion to show (the track stage asks after a
+        whole pass found nothing)."""
+        region = self.region
+        region.params = replace(region.params, acquisition=replace(
+            region.params.acquisition, min_periodicity=0.0))
+        region.candidates.params = region.params.acquisition
 
     def restart(self) -> None:
         """Forget the track, keep what was learnt (for a second pass from the video's start)."""
@@ -201,7 +215,10 @@ class SpongeTracker:
         if region.table is None:
             return
         if self.feature is None:
-            self.feature = LinearColourFeature.fit(region.seed_windows, region.seed_masks)
+            try:
+                self.feature = LinearColourFeature.fit(region.seed_windows, region.seed_masks)
+            except ValueError:  # too few of the sponge's pixels to learn it from yet
+                return
         R_track_table = table_axes(self.T_track_left[:3, :3] @ region.table.normal)
         if self.box.R_track_table is not None and np.allclose(self.box.R_track_table,
                                                               R_track_table):

@@ -187,7 +187,8 @@ class H264Writer:
         stream = self._container.add_stream("libx264", rate=Fraction(fps))
         stream.width, stream.height = size
         stream.pix_fmt = "yuv420p"
-        stream.options = {"crf": str(crf), "preset": preset, "bf": "0"}
+        # one encoder thread: the tracker and the decoders already keep the cores busy
+        stream.options = {"crf": str(crf), "preset": preset, "bf": "0", "threads": "1"}
         self._stream = stream
 
     def write(self, frame_bgr: np.ndarray) -> None:
