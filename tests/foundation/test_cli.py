@@ -51,3 +51,25 @@ def test_a_ctrl_c_inside_compiled_code_counts_as_an_interrupt():
     assert from_user_interrupt(KeyboardInterrupt())
     assert not from_user_interrupt(SystemError("a real internal error"))
     assert not from_user_interrupt(InputError("x.csv: bad"))
+
+
+def test_a_ctrl_c_while_threads_start_comes_after_they_all_started():
+    """interrupts_deferred: the block runs to its end, then the Ctrl-C is raised (a thread
+    left half-started would run unjoined into Python's exit and abort the process)."""
+    import signal
+    import threading
+
+    from wipelab.errors import interrupts_deferred
+
+    release = threading.Event()
+    threads = [threading.Thread(target=release.wait) for _ in range(2)]
+    with pytest.raises(KeyboardInterrupt):
+        with interrupts_deferred():
+            signal.raise_signal(signal.SIGINT)
+            for thread in threads:
+                thread.start()
+    assert all(thread.is_alive() for thread in threads)
+    release.set()
+    for thread in threads:
+        thread.join()
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

@@ -83,6 +83,10 @@ class _WipelabGroup(click.Group):
     @staticmethod
     def _interrupted(ctx: click.Context) -> None:
         """Ctrl-C: one line and exit code 130; a stage's files appear only when it finishes."""
+        from tqdm import tqdm
+
+        for bar in list(tqdm._instances):  # a bar the Ctrl-C cut off while it was drawn
+            bar.close()
         click.echo("interrupted: no output of the unfinished work was written", err=True)
         ctx.exit(130)
 

@@ -28,6 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wipelab.errors import interrupts_deferred
+
 #: Seconds of pairs a feed holds for the session before it drops the oldest (real time):
 #: the tracker's one-off work when it finds the sponge takes up to about half a second.
 BUFFER_SECONDS = 1.0
@@ -94,7 +96,8 @@ class FrameFeed:
     def start(self) -> None:
         """Start reading (the source's clock starts now)."""
         self.start_time = time.perf_counter()
-        self._thread.start()
+        with interrupts_deferred():
+            self._thread.start()
 
     def next(self) -> FramePair | None:
         """The oldest waiting pair (blocks until one arrives); None at the end of the source."""

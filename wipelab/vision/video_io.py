@@ -18,7 +18,7 @@ import av
 import cv2
 import numpy as np
 
-from wipelab.errors import InputError
+from wipelab.errors import InputError, interrupts_deferred
 from wipelab.input_files import check_readable
 
 
@@ -145,9 +145,10 @@ class _Decoders:
                         for path, q in zip(paths, self.queues)]
 
     def start(self) -> None:
-        _Decoders.running.add(self)
-        for thread in self.threads:
-            thread.start()
+        with interrupts_deferred():   # both threads started, or none
+            _Decoders.running.add(self)
+            for thread in self.threads:
+                thread.start()
 
     def stop(self) -> None:
         self.halt.set()
