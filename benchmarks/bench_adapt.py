@@ -1,7 +1,7 @@
 """Adapt/replay benchmark: default placement, force at the human's tempo, beside two baselines.
 
     python benchmarks/bench_adapt.py [--surfaces flat bowl sink wavy 0 1 2 3 100 101 102 103]
-                                     [--periods 3] [--keep DIR]
+                                     [--periods 3] [--keep DIR] [--speed-only]
 
 Surfaces: the built-ins flat, bowl, sink, the wavy heightfield of ``data/surfaces`` and random
 ones (an integer: :func:`random_surfaces.random_surface` of that seed; heightfields and OBJ
@@ -111,6 +111,8 @@ def main() -> None:
                                  *map(str, random_surfaces.HELD_OUT_SEEDS)])
     parser.add_argument("--periods", type=int, default=3, help="scored replay periods per run")
     parser.add_argument("--keep", type=Path, default=None, help="keep the outputs here")
+    parser.add_argument("--speed-only", action="store_true",
+                        help="only the speed table (3.) on the flat table")
     args = parser.parse_args()
     from wipelab.errors import InputError
     from wipelab.stages.adapt import AdaptParams, run_adapt
@@ -118,6 +120,11 @@ def main() -> None:
 
     work = args.keep or Path(tempfile.mkdtemp(prefix="bench_adapt-"))
     work.mkdir(parents=True, exist_ok=True)
+    if args.speed_only:
+        speed(work)
+        if args.keep is None:
+            shutil.rmtree(work)
+        return
     described, placed_rows, learn_rows, replay_rows = [], [], [], []
     worst: dict[tuple[str, float], dict] = {}
     for name in args.surfaces:
