@@ -108,7 +108,8 @@ def frame_transforms_series(ns: list[int], frames) -> Iterator[fm.FrameTransform
         yield fm.FrameTransforms(transforms=[
             fm.FrameTransform(timestamp=stamp, parent_frame_id=parent, child_frame_id=child,
                               translation=fm.Vector3(x=t[k][0], y=t[k][1], z=t[k][2]),
-                              rotation=fm.Quaternion(x=q[k][0], y=q[k][1], z=q[k][2], w=q[k][3]))
+                              rotation=fm.Quaternion(x=q[k][0], y=q[k][1], z=q[k][2],
+                                                     w=q[k][3]))
             for parent, child, t, q in frames])
 
 

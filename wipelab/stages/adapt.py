@@ -34,6 +34,7 @@ from wipelab.control.force_profile import ProfileLearningParams
 from wipelab.control.iterative_learning import IterativeLearningParams
 from wipelab.errors import InputError
 from wipelab.logs import StageRecorder
+from wipelab.long_lived import long_lived_objects
 from wipelab.manifest import build_manifest, sha256_file, write_json
 from wipelab.model_file import read_model
 from wipelab.sim.adaptation import Adaptation, AdaptationParams
@@ -166,16 +167,18 @@ def run_adapt(model_path: str | os.PathLike, out_dir: str | os.PathLike,
     """
     params.validate()
     model_path = Path(model_path)
-    model = read_model(model_path)
-    require_dofs(model, ("x", "y"), str(model_path))
-    surface = load_surface(params.surface)
-    as_learned = place_model(model, (0.0, 0.0), params.amplitude_scale)
-    refitted = with_kernels(as_learned, params.kernels)
-    placement = place_task(refitted, surface, params.task_options(), str(model_path),
-                           params.center, None if params.base is None else BasePose(*params.base))
-    placed = placement.model
-    parameters = json_parameters(params)
-    task = build_task(placed, surface, placement.options, str(model_path), placement.plan)
+    with long_lived_objects():  # kernels and simulator: kept to the end
+        model = read_model(model_path)
+        require_dofs(model, ("x", "y"), str(model_path))
+        surface = load_surface(params.surface)
+        as_learned = place_model(model, (0.0, 0.0), params.amplitude_scale)
+        refitted = with_kernels(as_learned, params.kernels)
+        base = None if params.base is None else BasePose(*params.base)
+        placement = place_task(refitted, surface, params.task_options(), str(model_path),
+                               params.center, base)
+        placed = placement.model
+        parameters = json_parameters(params)
+        task = build_task(placed, surface, placement.options, str(model_path), placement.plan)
     try:
         run = Adaptation(task, placed, params.adaptation())
         with tqdm(desc="adapt", unit="step", disable=quiet, leave=False) as bar:
