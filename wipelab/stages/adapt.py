@@ -32,6 +32,7 @@ from tqdm import tqdm
 from wipelab.control.compliance import ComplianceParams
 from wipelab.control.force_profile import ProfileLearningParams
 from wipelab.control.iterative_learning import IterativeLearningParams
+from wipelab.blas_threads import single_threaded_blas
 from wipelab.errors import InputError
 from wipelab.logs import StageRecorder
 from wipelab.long_lived import long_lived_objects
@@ -156,6 +157,7 @@ def adapt_metrics(task: WipingTask, run: Adaptation, trace: dict, adapted, param
     }
 
 
+@single_threaded_blas
 def run_adapt(model_path: str | os.PathLike, out_dir: str | os.PathLike,
               params: AdaptParams = AdaptParams(), quiet: bool = False) -> dict:
     """Run the adapt stage; returns the metrics (also written to ``metrics.json``).

@@ -35,6 +35,7 @@ import numpy as np
 from tqdm import tqdm
 
 from wipelab.control.compliance import ComplianceParams
+from wipelab.blas_threads import single_threaded_blas
 from wipelab.errors import InputError
 from wipelab.learning import PeriodicModel
 from wipelab.logs import StageRecorder
@@ -212,6 +213,7 @@ def run_metrics(task: WipingTask, trace: dict, run: RunResult, target_force: flo
     return result
 
 
+@single_threaded_blas
 def run_replay(model_path: str | os.PathLike, out_dir: str | os.PathLike,
                params: ReplayParams = ReplayParams(), quiet: bool = False) -> dict:
     """Run the replay stage; returns the metrics (also written to ``metrics.json``)."""
