@@ -231,16 +231,18 @@ def speed(work: Path) -> None:
     model = work / "model_flat.json"
     if not model.exists():
         demonstration_model("flat", work)
+    at_exit = ";from wipelab.long_lived import freeze_at_exit; freeze_at_exit()"  # as the CLI
     probes = {
         "python start-up": [sys.executable, "-c", "pass"],
         "+ imports of the stages": [sys.executable, "-c",
-                                    "import wipelab.stages.adapt, wipelab.stages.replay"],
+                                    "import wipelab.stages.adapt, wipelab.stages.replay"
+                                    + at_exit],
         "+ loading the compiled kernels": [sys.executable, "-c",
                                            "import wipelab.stages.adapt;"
                                            "from wipelab.sim.task import RightArm;"
                                            "import numpy as np;"
                                            "RightArm({}).posture_for([0.6, -0.3, 0.9], "
-                                           "np.array([[0.6, -0.3, 0.9]]))"],
+                                           "np.array([[0.6, -0.3, 0.9]]))" + at_exit],
     }
     rows = [placement_speed(model)]
     for name, command in probes.items():
