@@ -1,6 +1,11 @@
 """The simulating stages run BLAS on one thread and give the threads back afterwards."""
 
+import os
+import subprocess
+import sys
+
 import numpy as np
+import scipy.linalg  # noqa: F401  (both OpenBLAS libraries loaded before the tests set limits)
 import pytest
 from threadpoolctl import threadpool_info, threadpool_limits
 
@@ -24,6 +29,7 @@ def test_inside_one_thread_outside_as_before():
     with threadpool_limits(limits=2, user_api="blas"):
         result, inside = product()
         assert blas_threads() == [2] * len(inside)
+    assert len(inside) >= 2, "SciPy's OpenBLAS (numba's) is not limited"
     assert inside == [1] * len(inside) and result[0, 0] == 50.0
 
 
@@ -42,3 +48,19 @@ def test_restored_when_the_function_raises():
 def test_the_stages_are_wrapped(stage):
     assert stage.__wrapped__.__name__ == stage.__name__
     assert stage.__code__ is single_threaded_blas(lambda: None).__code__
+
+
+@pytest.mark.parametrize("preset, expected", [(None, 1), ("2", 2)])
+def test_a_command_starts_its_blas_libraries_on_one_thread_unless_told(preset, expected):
+    code = ("from wipelab.blas_threads import start_with_one_blas_thread\n"
+            "start_with_one_blas_thread()\n"
+            "import numpy, scipy.linalg\n"
+            "from threadpoolctl import threadpool_info\n"
+            "print(sorted({p['num_threads'] for p in threadpool_info()"
+            " if p['user_api'] == 'blas'}))")
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    if preset is not None:
+        env["OPENBLAS_NUM_THREADS"] = preset
+    done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                          check=True)
+    assert done.stdout.strip() == f"[{expected}]"
