@@ -231,13 +231,16 @@ def speed(work: Path) -> None:
     model = work / "model_flat.json"
     if not model.exists():
         demonstration_model("flat", work)
-    at_exit = ";from wipelab.long_lived import freeze_at_exit; freeze_at_exit()"  # as the CLI
+    # start and end as the commands do (one BLAS thread from the start, all frozen at exit)
+    at_start = "from wipelab.blas_threads import start_with_one_blas_thread;" \
+        "start_with_one_blas_thread();"
+    at_exit = ";from wipelab.long_lived import freeze_at_exit; freeze_at_exit()"
     probes = {
         "python start-up": [sys.executable, "-c", "pass"],
-        "+ imports of the stages": [sys.executable, "-c",
+        "+ imports of the stages": [sys.executable, "-c", at_start +
                                     "import wipelab.stages.adapt, wipelab.stages.replay"
                                     + at_exit],
-        "+ loading the compiled kernels": [sys.executable, "-c",
+        "+ loading the compiled kernels": [sys.executable, "-c", at_start +
                                            "import wipelab.stages.adapt;"
                                            "from wipelab.sim.task import RightArm;"
                                            "import numpy as np;"
