@@ -1,7 +1,7 @@
 """Adapt/replay benchmark: default placement, force at the human's tempo, beside two baselines.
 
     python benchmarks/bench_adapt.py [--surfaces flat bowl sink wavy 0 1 2 3 100 101 102 103]
-                                     [--periods 3] [--keep DIR]
+                                     [--periods 3] [--keep DIR] [--speed-only]
 
 Surfaces: the built-ins flat, bowl, sink, the wavy heightfield of ``data/surfaces`` and random
 ones (an integer: :func:`random_surfaces.random_surface` of that seed; heightfields and OBJ
@@ -28,6 +28,7 @@ Prints the tables, the worst case per mode and tempo, and the targets in bracket
 from __future__ import annotations
 
 import argparse
+import compileall
 import json
 import math
 import os
@@ -111,6 +112,8 @@ def main() -> None:
                                  *map(str, random_surfaces.HELD_OUT_SEEDS)])
     parser.add_argument("--periods", type=int, default=3, help="scored replay periods per run")
     parser.add_argument("--keep", type=Path, default=None, help="keep the outputs here")
+    parser.add_argument("--speed-only", action="store_true",
+                        help="only the speed table (3.) on the flat table")
     args = parser.parse_args()
     from wipelab.errors import InputError
     from wipelab.stages.adapt import AdaptParams, run_adapt
@@ -118,6 +121,11 @@ def main() -> None:
 
     work = args.keep or Path(tempfile.mkdtemp(prefix="bench_adapt-"))
     work.mkdir(parents=True, exist_ok=True)
+    if args.speed_only:
+        speed(work)
+        if args.keep is None:
+            shutil.rmtree(work)
+        return
     described, placed_rows, learn_rows, replay_rows = [], [], [], []
     worst: dict[tuple[str, float], dict] = {}
     for name in args.surfaces:
@@ -224,16 +232,24 @@ def speed(work: Path) -> None:
     model = work / "model_flat.json"
     if not model.exists():
         demonstration_model("flat", work)
+    # wipelab's bytecode cached, as Python leaves it after a first run (with
+    # PYTHONDONTWRITEBYTECODE set, every command would compile its ~75 modules again: 0.1 s)
+    compileall.compile_dir(REPO / "wipelab", quiet=1)
+    # start and end as the commands do (one BLAS thread from the start, all frozen at exit)
+    at_start = "from wipelab.blas_threads import start_with_one_blas_thread;" \
+        "start_with_one_blas_thread();"
+    at_exit = ";from wipelab.long_lived import freeze_at_exit; freeze_at_exit()"
     probes = {
         "python start-up": [sys.executable, "-c", "pass"],
-        "+ imports of the stages": [sys.executable, "-c",
-                                    "import wipelab.stages.adapt, wipelab.stages.replay"],
-        "+ loading the compiled kernels": [sys.executable, "-c",
+        "+ imports of the stages": [sys.executable, "-c", at_start +
+                                    "import wipelab.stages.adapt, wipelab.stages.replay"
+                                    + at_exit],
+        "+ loading the compiled kernels": [sys.executable, "-c", at_start +
                                            "import wipelab.stages.adapt;"
                                            "from wipelab.sim.task import RightArm;"
                                            "import numpy as np;"
                                            "RightArm({}).posture_for([0.6, -0.3, 0.9], "
-                                           "np.array([[0.6, -0.3, 0.9]]))"],
+                                           "np.array([[0.6, -0.3, 0.9]]))" + at_exit],
     }
     rows = [placement_speed(model)]
     for name, command in probes.items():

@@ -16,6 +16,7 @@ import wipelab
 from wipelab.cli.usage_errors import usage_message
 from wipelab.errors import InputError, from_user_interrupt
 from wipelab.library_logs import silence_library_logs
+from wipelab.long_lived import freeze_at_exit
 
 
 #: command name -> module that defines it (imported on first use, so that ``wipelab --version``
@@ -106,4 +107,7 @@ def cli(verbose: bool) -> None:
 
 def main() -> None:
     """Console-script entry point."""
-    sys.exit(cli.main(prog_name="wipelab"))
+    try:
+        sys.exit(cli.main(prog_name="wipelab"))
+    finally:
+        freeze_at_exit()

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import click
 
+from wipelab.blas_threads import start_with_one_blas_thread
 from wipelab.cli.options import OUTPUT_DIR, PATH, comma_separated
 
 
@@ -77,6 +78,7 @@ def adapt(model: Path, out_dir: Path, surface: str | None, force: float | None,
     z; the z that keeps F0 is learned online. Writes OUT/adapted_model.json, metrics.json,
     adapt.mcap, adapt.rrd and manifest.json.
     """
+    start_with_one_blas_thread()
     from wipelab.control.force_profile import ProfileLearningParams
     from wipelab.stages.adapt import AdaptParams, run_adapt
 
@@ -136,6 +138,7 @@ def replay(model: Path, more_scales: tuple[float, ...], out_dir: Path, surface: 
     Usage: wipelab replay MODEL -o OUT --frequency-scale 1 2 3. Writes OUT/metrics.json (per
     scale and mode), replay.mcap, replay.rrd and manifest.json.
     """
+    start_with_one_blas_thread()
     from wipelab.stages.replay import MODES, ReplayParams, run_replay
 
     if more_scales and not scales:

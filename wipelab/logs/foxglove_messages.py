@@ -8,6 +8,8 @@ which :mod:`wipelab.logs.mcap_log` writes under the schema's exact name so that 
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numpy as np
 from foxglove import messages as fm
 
@@ -43,12 +45,19 @@ def unit_quaternions(q_xyzw) -> np.ndarray:
 
 def quaternion(q_xyzw) -> fm.Quaternion:
     """``foxglove.Quaternion`` of ``unit_quaternion(q_xyzw)``."""
-    x, y, z, w = (float(c) for c in unit_quaternion(q_xyzw))
+    x, y, z, w = unit_quaternion(q_xyzw).tolist()
     return fm.Quaternion(x=x, y=y, z=z, w=w)
 
 
 def pose(translation: np.ndarray, q_xyzw: np.ndarray) -> fm.Pose:
     return fm.Pose(position=vector3(translation), orientation=quaternion(q_xyzw))
+
+
+def _rows(translations, q_xyzw) -> tuple[list, list]:
+    """Translations (n, 3) and unit quaternions (n, 4) as lists of float rows (normalised in
+    one call: the same values as :func:`unit_quaternion` row by row)."""
+    return (np.asarray(translations, dtype=float).reshape(-1, 3).tolist(),
+            unit_quaternions(q_xyzw).tolist())
 
 
 def rgba_uint8(colors, n: int) -> np.ndarray:
@@ -87,15 +96,34 @@ def image_format(data: bytes) -> str:
 
 def frame_transforms(ns: int, transforms) -> fm.FrameTransforms:
     """``foxglove.FrameTransforms`` from ``[(parent, child, translation (3,), q_xyzw (4,)), ...]``."""
-    stamp = timestamp(ns)
-    return fm.FrameTransforms(transforms=[
-        fm.FrameTransform(timestamp=stamp, parent_frame_id=parent, child_frame_id=child,
-                          translation=vector3(t), rotation=quaternion(q))
-        for parent, child, t, q in transforms])
+    return next(frame_transforms_series([ns], transforms))
+
+
+def frame_transforms_series(ns: list[int], frames) -> Iterator[fm.FrameTransforms]:
+    """:func:`frame_transforms` at each time ``ns[k]`` from moving frames ``[(parent, child,
+    translations (n, 3), q_xyzw (n, 4)), ...]`` (each frame's arrays converted once)."""
+    frames = [(parent, child, *_rows(t, q)) for parent, child, t, q in frames]
+    for k, time_ns in enumerate(ns):
+        stamp = timestamp(time_ns)
+        yield fm.FrameTransforms(transforms=[
+            fm.FrameTransform(timestamp=stamp, parent_frame_id=parent, child_frame_id=child,
+                              translation=fm.Vector3(x=t[k][0], y=t[k][1], z=t[k][2]),
+                              rotation=fm.Quaternion(x=q[k][0], y=q[k][1], z=q[k][2],
+                                                     w=q[k][3]))
+            for parent, child, t, q in frames])
 
 
 def pose_in_frame(ns: int, frame_id: str, translation, q_xyzw) -> fm.PoseInFrame:
-    return fm.PoseInFrame(timestamp=timestamp(ns), frame_id=frame_id, pose=pose(translation, q_xyzw))
+    return next(poses_in_frame([ns], frame_id, translation, q_xyzw))
+
+
+def poses_in_frame(ns: list[int], frame_id: str, translations, q_xyzw
+                   ) -> Iterator[fm.PoseInFrame]:
+    """:func:`pose_in_frame` at each time ``ns[k]`` for poses (n, 3) and (n, 4)."""
+    for time_ns, (x, y, z), (qx, qy, qz, qw) in zip(ns, *_rows(translations, q_xyzw)):
+        yield fm.PoseInFrame(timestamp=timestamp(time_ns), frame_id=frame_id, pose=fm.Pose(
+            position=fm.Vector3(x=x, y=y, z=z), orientation=fm.Quaternion(x=qx, y=qy, z=qz,
+                                                                          w=qw)))
 
 
 def camera_calibration(ns: int, K: np.ndarray, D: np.ndarray, width: int, height: int,

@@ -492,10 +492,8 @@ class StageRecorder:
             if translations.shape[0] != ns.size or quaternions.shape[0] != ns.size:
                 raise ValueError(f"frame {child!r}: need {ns.size} translations and quaternions")
         channel = self._mcap.protobuf_channel(TF_TOPIC, fm.FrameTransforms)
-        for k, time_ns in enumerate(ns.tolist()):
-            message = fx.frame_transforms(time_ns, [(parent, child, translations[k], quaternions[k])
-                                                    for parent, child, translations, quaternions
-                                                    in frames])
+        times = ns.tolist()
+        for time_ns, message in zip(times, fx.frame_transforms_series(times, frames)):
             self._mcap.write(channel, time_ns, message.encode())
         for parent, child, translations, quaternions in frames:
             unit = fx.unit_quaternions(quaternions)
@@ -517,9 +515,10 @@ class StageRecorder:
         if translations.shape[0] != ns.size or unit.shape[0] != ns.size:
             raise ValueError(f"{topic}: need {ns.size} translations and quaternions")
         channel = self._mcap.protobuf_channel(topic, fm.PoseInFrame)
-        for time_ns, translation, quaternion in zip(ns.tolist(), translations, quaternions):
-            self._mcap.write(channel, time_ns,
-                             fx.pose_in_frame(time_ns, frame_id, translation, quaternion).encode())
+        times = ns.tolist()
+        for time_ns, message in zip(times, fx.poses_in_frame(times, frame_id, translations,
+                                                             quaternions)):
+            self._mcap.write(channel, time_ns, message.encode())
         frames = {} if frame_id == WORLD_FRAME else \
             {"parent_frame": [frame_id] * ns.size, "child_frame": [f"tf#{entity}"] * ns.size}
         self.rerun.log(entity, rr.TransformAxes3D(POSE_AXIS_LENGTH), static=True)

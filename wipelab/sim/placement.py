@@ -383,7 +383,8 @@ def _diverse(order: np.ndarray, positions: np.ndarray, count: int) -> list[int]:
     ways to stand before near-copies of a rejected one."""
     chosen: list[int] = []
     for k in order:
-        if all(np.linalg.norm(positions[k] - positions[c]) >= DIVERSITY for c in chosen):
+        apart = positions[chosen] - positions[k]
+        if np.all(np.einsum("ij,ij->i", apart, apart) >= DIVERSITY ** 2):
             chosen.append(int(k))
             if len(chosen) == count:
                 return chosen

@@ -32,8 +32,10 @@ from tqdm import tqdm
 from wipelab.control.compliance import ComplianceParams
 from wipelab.control.force_profile import ProfileLearningParams
 from wipelab.control.iterative_learning import IterativeLearningParams
+from wipelab.blas_threads import single_threaded_blas
 from wipelab.errors import InputError
 from wipelab.logs import StageRecorder
+from wipelab.long_lived import long_lived_objects
 from wipelab.manifest import build_manifest, sha256_file, write_json
 from wipelab.model_file import read_model
 from wipelab.sim.adaptation import Adaptation, AdaptationParams
@@ -155,6 +157,7 @@ def adapt_metrics(task: WipingTask, run: Adaptation, trace: dict, adapted, param
     }
 
 
+@single_threaded_blas
 def run_adapt(model_path: str | os.PathLike, out_dir: str | os.PathLike,
               params: AdaptParams = AdaptParams(), quiet: bool = False) -> dict:
     """Run the adapt stage; returns the metrics (also written to ``metrics.json``).
@@ -166,16 +169,18 @@ def run_adapt(model_path: str | os.PathLike, out_dir: str | os.PathLike,
     """
     params.validate()
     model_path = Path(model_path)
-    model = read_model(model_path)
-    require_dofs(model, ("x", "y"), str(model_path))
-    surface = load_surface(params.surface)
-    as_learned = place_model(model, (0.0, 0.0), params.amplitude_scale)
-    refitted = with_kernels(as_learned, params.kernels)
-    placement = place_task(refitted, surface, params.task_options(), str(model_path),
-                           params.center, None if params.base is None else BasePose(*params.base))
-    placed = placement.model
-    parameters = json_parameters(params)
-    task = build_task(placed, surface, placement.options, str(model_path), placement.plan)
+    with long_lived_objects():  # kernels and simulator: kept to the end
+        model = read_model(model_path)
+        require_dofs(model, ("x", "y"), str(model_path))
+        surface = load_surface(params.surface)
+        as_learned = place_model(model, (0.0, 0.0), params.amplitude_scale)
+        refitted = with_kernels(as_learned, params.kernels)
+        base = None if params.base is None else BasePose(*params.base)
+        placement = place_task(refitted, surface, params.task_options(), str(model_path),
+                               params.center, base)
+        placed = placement.model
+        parameters = json_parameters(params)
+        task = build_task(placed, surface, placement.options, str(model_path), placement.plan)
     try:
         run = Adaptation(task, placed, params.adaptation())
         with tqdm(desc="adapt", unit="step", disable=quiet, leave=False) as bar:

@@ -35,9 +35,11 @@ import numpy as np
 from tqdm import tqdm
 
 from wipelab.control.compliance import ComplianceParams
+from wipelab.blas_threads import single_threaded_blas
 from wipelab.errors import InputError
 from wipelab.learning import PeriodicModel
 from wipelab.logs import StageRecorder
+from wipelab.long_lived import long_lived_objects
 from wipelab.manifest import build_manifest, write_json
 from wipelab.sim.metrics import coverage, force_metrics
 from wipelab.model_file import read_model
@@ -211,6 +213,7 @@ def run_metrics(task: WipingTask, trace: dict, run: RunResult, target_force: flo
     return result
 
 
+@single_threaded_blas
 def run_replay(model_path: str | os.PathLike, out_dir: str | os.PathLike,
                params: ReplayParams = ReplayParams(), quiet: bool = False) -> dict:
     """Run the replay stage; returns the metrics (also written to ``metrics.json``)."""
@@ -235,19 +238,20 @@ def run_replay(model_path: str | os.PathLike, out_dir: str | os.PathLike,
     except ValueError as error:
         raise InputError(f"replay: {error}") from None
     base = None if params.base is None else BasePose(*params.base)
-    if has_z:   # the path, the platform and the torso as adapted, unless --base moves it
-        adapted_base, hip_pitch = _adapted_pose(model, str(model_path))
-        centre = dof_waveform(model, ("x", "y"))
-        centre = 0.5 * (centre.min(axis=0) + centre.max(axis=0))
-        placement = place_task(model, surface, options, str(model_path), centre,
-                               base or adapted_base, hip_pitch)
-    else:
-        placement = place_task(model, surface, options, str(model_path), params.center, base)
-    model = placement.model
-    z_plane = float(np.mean(dof_waveform(model, ("z",)))) if has_z else math.nan
-    parameters = json_parameters(replace(params, modes=modes))
-    parameters.update(surface=surface_spec, force=force, feedback=feedback)
-    task = build_task(model, surface, placement.options, str(model_path), placement.plan)
+    with long_lived_objects():  # kernels and simulator: kept to the end
+        if has_z:   # the path, the platform and the torso as adapted, unless --base moves it
+            adapted_base, hip_pitch = _adapted_pose(model, str(model_path))
+            centre = dof_waveform(model, ("x", "y"))
+            centre = 0.5 * (centre.min(axis=0) + centre.max(axis=0))
+            placement = place_task(model, surface, options, str(model_path), centre,
+                                   base or adapted_base, hip_pitch)
+        else:
+            placement = place_task(model, surface, options, str(model_path), params.center, base)
+        model = placement.model
+        z_plane = float(np.mean(dof_waveform(model, ("z",)))) if has_z else math.nan
+        parameters = json_parameters(replace(params, modes=modes))
+        parameters.update(surface=surface_spec, force=force, feedback=feedback)
+        task = build_task(model, surface, placement.options, str(model_path), placement.plan)
     try:
         session = task.session
         start = dof_waveform(model, ("x", "y"), [0.0])[0]
