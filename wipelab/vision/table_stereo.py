@@ -69,14 +69,17 @@ class TableStereo:
         d_high = self.focal * self.baseline / (DEPTH_RANGE[0] * depth)
         scale = min(1.0, MAX_DISPARITIES / max(d_high - d_low, 1e-6),
                     800.0 / max(self.calibration.image_size))
+        minimum = int(np.floor(d_low * scale))
+        count = int(np.ceil((d_high - d_low) * scale / 16.0 + 1)) * 16
+        block = 5
+        along = self.calibration.image_size[1 if self.vertical else 0] * scale
+        if minimum + count + block >= along:
+            return np.zeros((0, 3))   # so near the cameras that no match fits in the image
         images = [cv2.remap(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), mx, my, cv2.INTER_LINEAR)
                   for frame, (mx, my) in zip((left, right), self._maps(scale))]
         if self.vertical:
             images = [np.ascontiguousarray(image.T) for image in images]
         first, second = images[::-1] if self.swap else images
-        minimum = int(np.floor(d_low * scale))
-        count = int(np.ceil((d_high - d_low) * scale / 16.0 + 1)) * 16
-        block = 5
         matcher = cv2.StereoSGBM_create(
             minDisparity=minimum, numDisparities=count, blockSize=block,
             P1=8 * block * block, P2=32 * block * block, uniquenessRatio=10,

@@ -180,9 +180,11 @@ class SpongeTracker:
 
     def _yaw(self, direction_left: np.ndarray) -> float:
         """Yaw (rad, half turn) of the region's long axis (3,), left frame, about the table
-        normal, measured like the box's (from :func:`table_axes` of the tracking frame)."""
+        normal, measured like the box's (from :func:`table_axes` of the tracking frame; the
+        tracking frame's own axes while no plane is known)."""
         plane = self.region.sponge_plane()
-        R_track_table = table_axes(self.T_track_left[:3, :3] @ plane.normal)
+        R_track_table = np.eye(3) if plane is None else \
+            table_axes(self.T_track_left[:3, :3] @ plane.normal)
         d = R_track_table.T @ (self.T_track_left[:3, :3] @ direction_left)
         return float(wrap_half_turn(np.arctan2(d[1], d[0])))
 

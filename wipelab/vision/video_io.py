@@ -194,7 +194,9 @@ class H264Writer:
 
     def write(self, frame_bgr: np.ndarray) -> None:
         """Append one frame, shape (h, w, 3) uint8."""
-        frame = av.VideoFrame.from_ndarray(frame_bgr, format="bgr24")
+        # OpenCV's BGR -> I420 is several times faster than FFmpeg's swscale in the encoder
+        frame = av.VideoFrame.from_ndarray(cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2YUV_I420),
+                                           format="yuv420p")
         self._container.mux(self._stream.encode(frame))
 
     def close(self) -> None:

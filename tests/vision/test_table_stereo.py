@@ -1,0 +1,48 @@
+"""The table plane from dense stereo (wipelab.vision.table_stereo) on a small scene of the
+independent generator: its height and tilt against the scene's own table, and a point too
+near the cameras for any match (a hand in front of the lens) gives no points, not an error."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from tests.stereo_scenes import render_scene
+from wipelab.stages.track import open_demo
+from wipelab.trajectory_csv import read_trajectory
+from wipelab.vision.projection import invert_transform, transform_points
+from wipelab.vision.table_stereo import TableStereo
+
+SEED = 5  # a development seed: H.264, wood-like table texture
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory):
+    path = render_scene(tmp_path_factory.mktemp("table") / "scene", SEED, duration=1.0,
+                        small=True)
+    plan = json.loads((path / "scene.json").read_text())
+    demo = open_demo(path)
+    left, right = next(iter(demo.reader))
+    T_left_world = invert_transform(np.array(plan["cameras"]["T_world_left"]))
+    truth = read_trajectory(path / "truth.csv", required=("t", "x", "y", "z"))
+    sponge = transform_points(T_left_world, truth.array(["x", "y", "z"])[:1])[0]
+    return demo.calibration, (left, right), sponge, T_left_world, plan["table"]["height"]
+
+
+def test_the_table_plane_near_the_sponge_is_the_scenes_table(scene):
+    calibration, frames, sponge, T_left_world, height = scene
+    plane = TableStereo(calibration).plane_near([frames], sponge, radius=0.3)
+    assert plane is not None
+    up = T_left_world[:3, :3] @ np.array([0.0, 0.0, 1.0])   # the world's up, left frame
+    assert np.degrees(np.arccos(abs(plane.normal @ up))) < 2.0
+    # a point of the table top (world z = height) lies on the fitted plane
+    on_top = transform_points(T_left_world, np.array([[0.8, 0.0, height]]))[0]
+    assert abs(plane.distance(on_top[None])[0]) < 0.01
+
+
+def test_a_point_too_near_the_cameras_gives_no_points(scene):
+    calibration, frames, _, _, _ = scene
+    points = TableStereo(calibration).table_points(*frames, np.array([0.0, 0.0, 0.02]))
+    assert points.shape == (0, 3)
