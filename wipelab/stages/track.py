@@ -525,7 +525,7 @@ class LogVideos:
         self.scale = 1.0 / factor
         self.size = (width // factor // 2 * 2, height // factor // 2 * 2)  # x264: even sides
         self.paths = [workdir / "left.mp4", workdir / "right.mp4"]
-        self._writers = [H264Writer(path, int(round(demo.reader.fps)), self.size, crf=23,
+        self._writers = [H264Writer(path, int(round(demo.reader.fps)), self.size, crf=28,
                                     preset="ultrafast") for path in self.paths]
 
     def write(self, left: np.ndarray, right: np.ndarray) -> None:
