@@ -139,6 +139,7 @@ class StageRecorder:
         self.recording_id = recording_id(stage, self.parameters, self.input_hashes)
         self._closed = False
         self._video_streams: set[str] = set()
+        self._placed: set[tuple[str, str]] = set()   # (entity, frame) logged statically
 
         described_inputs = {}
         for role, p in input_paths.items():
@@ -199,8 +200,10 @@ class StageRecorder:
         self._mcap.write(self._mcap.protobuf_channel(topic, type(message)), ns, message.encode())
 
     def _place(self, entity: str, frame_id: str) -> None:
-        """Put a Rerun entity into the named frame ``frame_id`` (world: the root, nothing to do)."""
-        if frame_id != WORLD_FRAME:
+        """Put a Rerun entity into the named frame ``frame_id`` (world: the root, nothing to do);
+        static, so once per entity and frame."""
+        if frame_id != WORLD_FRAME and (entity, frame_id) not in self._placed:
+            self._placed.add((entity, frame_id))
             self.rerun.log(entity, rr.CoordinateFrame(frame_id), static=True)
 
     # -- public logging API ----------------------------------------------------------------
@@ -356,7 +359,7 @@ class StageRecorder:
         line_rgba, point_rgba = fx.rgba_uint8(line_color, 1)[0], fx.rgba_uint8(point_color, 1)[0]
         ns = self._at(t)
         self._write(topic, ns, fx.image_annotations(ns, lines, line_rgba, points, point_rgba, 2.0))
-        self.rerun.log(entity, rr.CoordinateFrame(frame_id + IMAGE_PLANE_SUFFIX), static=True)
+        self._place(entity, frame_id + IMAGE_PLANE_SUFFIX)
         self.rerun.log(entity, rr.LineStrips2D(lines, colors=line_rgba, radii=1.0),
                        rr.Points2D(points, colors=point_rgba, radii=1.5))
 
@@ -577,7 +580,7 @@ class StageRecorder:
         image_format = fx.image_format(data)
         ns = self._at(t)
         self._write(topic, ns, fx.compressed_image(ns, data, frame_id, image_format))
-        self.rerun.log(entity, rr.CoordinateFrame(frame_id + IMAGE_PLANE_SUFFIX), static=True)
+        self._place(entity, frame_id + IMAGE_PLANE_SUFFIX)
         self.rerun.log(entity, rr.EncodedImage(contents=data, media_type=f"image/{image_format}"))
 
     def video(self, topic: str, mp4_path: str | os.PathLike, frame_times: np.ndarray,
@@ -607,7 +610,7 @@ class StageRecorder:
         for ns, unit in zip(frame_ns.tolist(), units):
             self._write(topic, ns, fx.compressed_video(ns, unit, frame_id or "", foxglove_format))
         if frame_id is not None:
-            self.rerun.log(entity, rr.CoordinateFrame(frame_id + IMAGE_PLANE_SUFFIX), static=True)
+            self._place(entity, frame_id + IMAGE_PLANE_SUFFIX)
         self.rerun.log(entity, asset, static=True)
         self.rerun.send_columns(
             entity, indexes=[rr.TimeColumn(TIMELINE, duration=frame_ns.astype("timedelta64[ns]"))],
