@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from wipelab.blas_threads import start_with_one_blas_thread
 from wipelab.cli.options import OUTPUT_DIR, PATH, comma_separated
 
 
@@ -74,6 +75,7 @@ def live(source: Path | None, out_dir: Path, cameras: str | None, calibration: P
     waveform stopped changing; then the robot slows down, moves down until contact, learns
     the force profile and wipes at --replay-scale times the demonstrated tempo.
     """
+    start_with_one_blas_thread()
     from wipelab.errors import InputError
     from wipelab.live.imitation import ImitationParams
     from wipelab.live.robot import RobotParams

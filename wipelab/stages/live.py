@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from wipelab.blas_threads import single_threaded_blas
 from wipelab.errors import InputError
 from wipelab.live.following import following_metrics
 from wipelab.live.frames import FrameFeed
@@ -81,6 +82,7 @@ class LiveParams:
         return self.speed == "1"
 
 
+@single_threaded_blas
 def run_live(source: LiveSource, out_dir: str | os.PathLike, params: LiveParams = LiveParams(),
              quiet: bool = False, listen_stdin: bool = True) -> dict:
     """Run a live session and write its outputs into ``out_dir`` (all or nothing).
