@@ -148,3 +148,14 @@ def test_scoring_windows_hold_every_sample_of_every_pose_with_the_margin(short_d
             height, width = window.feature.probability.shape
             assert uv.min() >= margin - 1
             assert np.all(uv < [width - margin + 1, height - margin + 1])
+
+
+def test_yaw_before_any_plane_is_measured_in_the_tracking_frame(calibration):
+    """A region measured before the table or the sponge's plane is known (an untextured table,
+    the first frames) gets a yaw about the tracking frame's own z axis, not an error."""
+    tracker = SpongeTracker(calibration, ColourSource(name="yellow"))
+    assert tracker.region.sponge_plane() is None
+    along_x_of_track = tracker.T_left_track[:3, :3] @ np.array([1.0, 0.0, 0.0])
+    along_y_of_track = tracker.T_left_track[:3, :3] @ np.array([0.0, 1.0, 0.0])
+    assert tracker._yaw(along_x_of_track) == pytest.approx(0.0, abs=1e-9)
+    assert abs(tracker._yaw(along_y_of_track)) == pytest.approx(np.pi / 2, abs=1e-9)
