@@ -54,7 +54,7 @@ from wipelab.stage_output import staged_output
 from wipelab.stages.adapt import adapt_metrics, json_parameters
 from wipelab.stages.replay import run_metrics
 from wipelab.stages.track import (TrackParams, TrackScene, colour_source, sponge_box,
-                                  tracked_table_axes, tracked_csv_columns)
+                                  tracked_csv_columns)
 from wipelab.trajectory_csv import write_trajectory
 from wipelab.vision.tracker import SpongeTracker, TrackerParams
 
@@ -183,7 +183,7 @@ class _Session:
         estimate = self.tracker.step(pair.left, pair.right)
         if self.tracker.ready and not self.scene_known:
             self.scene_known = True   # draw the sponge at its size and turn from now
-            self.log.scene_known(tracked_table_axes(self.tracker), self.tracker.region.size)
+            self.log.scene_known(self.tracker.table_axes_in_track(), self.tracker.region.size)
         self._advance(pair.index, estimate.pose, estimate.valid, estimate.quality)
         commanded = time.perf_counter()
         self.times.add(pair.arrived, commanded, late, self.imitating)

@@ -50,7 +50,6 @@ from wipelab.vision.demonstration_area import DemonstrationArea, measure_demonst
 from wipelab.sim.kinematics import rotation_about_axis
 from wipelab.vision.projection import invert_transform
 from wipelab.vision.sponge_box import EDGES, SpongeBox, yaw_rotation
-from wipelab.vision.table_plane import table_axes
 from wipelab.vision.tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_MONO, QUALITY_NONE,
                                     FrameEstimate, SpongeTracker,
                                     TrackerParams)
@@ -267,7 +266,7 @@ def _write_outputs(demo: Demo, out_dir, params: TrackParams, colour: ColourSourc
               "calibration": demo.calibration_path}
     scene = TrackScene(videos.calibration(demo.calibration),
                        "world" if result.frame == "world" else LEFT_FRAME,
-                       tracked_table_axes(tracker), result.sponge_size, result.region_size)
+                       tracker.table_axes_in_track(), result.sponge_size, result.region_size)
     blueprint = track_blueprint(scene, result.area,
                                 float(np.nanmean(result.poses[result.valid, 2])))
     with staged_output(out_dir) as tmp:
@@ -431,13 +430,6 @@ class TrackScene:
     def _pixels(self, camera, points_track: np.ndarray) -> np.ndarray:
         T = self.T_left_track
         return camera.project(points_track @ T[:3, :3].T + T[:3, 3]) + 0.5
-
-
-def tracked_table_axes(tracker: SpongeTracker) -> np.ndarray:
-    """Axes (3, 3) of the table in the track frame, as the tracker measures yaw (identity
-    before the plane the sponge moves in is known)."""
-    plane = tracker.region.sponge_plane()
-    return np.eye(3) if plane is None else table_axes(tracker.T_track_left[:3, :3] @ plane.normal)
 
 
 def track_blueprint(scene: TrackScene, area: DemonstrationArea, height: float) -> rrb.Blueprint:

@@ -178,14 +178,17 @@ class SpongeTracker:
                          self._yaw(region.direction))
         return FrameEstimate(pose, True, region.quality, region.areas, self._particles())
 
+    def table_axes_in_track(self) -> np.ndarray:
+        """Axes (3, 3) of the table in the tracking frame, as yaw is measured about them
+        (:func:`table_axes` of the plane the sponge moves in; identity before it is known)."""
+        plane = self.region.sponge_plane()
+        return np.eye(3) if plane is None else \
+            table_axes(self.T_track_left[:3, :3] @ plane.normal)
+
     def _yaw(self, direction_left: np.ndarray) -> float:
         """Yaw (rad, half turn) of the region's long axis (3,), left frame, about the table
-        normal, measured like the box's (from :func:`table_axes` of the tracking frame; the
-        tracking frame's own axes while no plane is known)."""
-        plane = self.region.sponge_plane()
-        R_track_table = np.eye(3) if plane is None else \
-            table_axes(self.T_track_left[:3, :3] @ plane.normal)
-        d = R_track_table.T @ (self.T_track_left[:3, :3] @ direction_left)
+        normal (:meth:`table_axes_in_track`), measured like the box's."""
+        d = self.table_axes_in_track().T @ (self.T_track_left[:3, :3] @ direction_left)
         return float(wrap_half_turn(np.arctan2(d[1], d[0])))
 
     # -------------------------------------------------------------- the box
