@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 from wipelab.vision.colour_model import (NAMED_COLOURS, ColourModel, ColourSource, HsvRange,
-                                         LinearColourFeature, largest_blob, parse_hsv_range)
+                                         LinearColourFeature, largest_blob, parse_hsv_range,
+                                         vivid_part)
 
 SPONGE, WOOD, SKIN = (40, 205, 240), (150, 188, 214), (122, 152, 208)
 
@@ -66,3 +67,37 @@ def test_colour_source_needs_exactly_one_description():
     with pytest.raises(ValueError, match="unknown colour 'mauve'"):
         ColourSource(name="mauve")
     assert ColourSource(roi=(1, 2, 3, 4)).option == "--roi 1,2,3,4"
+
+
+def _orange_sponge_and_arm(rng, arm_bgr):
+    """An orange sponge (rows 20-50, cols 20-70) held by an arm of ``arm_bgr`` (rows 35-60,
+    cols 70-190), both inside one region mask, on a grey table."""
+    image = np.clip(np.full((80, 200, 3), 120.0) + rng.normal(0, 3, (80, 200, 3)), 0, 255)
+    image[20:50, 20:70] = (8, 110, 204)     # H 12, S 235, V 204
+    image[35:60, 70:190] = arm_bgr
+    mask = np.zeros((80, 200), np.uint8)
+    mask[20:50, 20:70] = 255
+    mask[35:60, 70:190] = 255
+    return image.astype(np.uint8), mask
+
+
+def test_vivid_part_keeps_the_sponge_body_and_drops_a_dull_arm_of_its_hue():
+    # brown skin of the same hue as the sponge, but duller (H 11, S 150, V 116): the prior
+    # of "orange" takes in both; the body is the vivid group
+    image, mask = _orange_sponge_and_arm(np.random.default_rng(1), (48, 79, 116))
+    vivid = vivid_part(image, mask)
+    assert vivid[20:50, 20:70].all()
+    assert not vivid[35:60, 75:190].any()
+
+
+def test_a_model_learnt_from_the_vivid_part_reads_the_sponge_but_not_the_arm():
+    image, mask = _orange_sponge_and_arm(np.random.default_rng(3), (48, 79, 116))
+    model = ColourModel.fit([image], [vivid_part(image, mask)], unsure=[mask])
+    probability = model.back_project(image)
+    assert probability[22:48, 22:68].mean() > 0.9
+    assert probability[37:58, 75:190].mean() < 0.05
+
+
+def test_vivid_part_leaves_a_region_of_one_colour_whole():
+    image, mask = _orange_sponge_and_arm(np.random.default_rng(2), (8, 110, 204))
+    assert np.array_equal(vivid_part(image, mask), mask)

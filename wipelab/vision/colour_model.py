@@ -84,6 +84,32 @@ def largest_blob(mask: np.ndarray, min_area: int) -> np.ndarray | None:
     return (labels == best).astype(np.uint8) * 255
 
 
+def vivid_part(frame_bgr: np.ndarray, mask: np.ndarray, separation: float = 0.25
+               ) -> np.ndarray:
+    """The more vivid of two colour groups in a region, if it holds two: a region of a
+    named colour often takes in a duller thing of a near hue (skin, a wooden table, a
+    shadow); the sponge body is the vivid one.
+
+    The region's pixels (``mask``, 0/255) are split by their chroma (saturation times value,
+    HSV) at Otsu's threshold; when the two groups' mean chromas differ by more than
+    ``separation`` of the higher one and the vivid group holds a fifth of the pixels, the
+    mask of that group (0/255) is returned, else ``mask`` itself."""
+    hsv = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2HSV)
+    chroma = (hsv[..., 1].astype(np.uint16) * hsv[..., 2] // 255).astype(np.uint8)
+    values = chroma[mask > 0]
+    if values.size < 20:
+        return mask
+    threshold, _ = cv2.threshold(values.reshape(-1, 1), 0, 255,
+                                 cv2.THRESH_BINARY | cv2.THRESH_OTSU)
+    vivid = values > threshold
+    if not vivid.any() or vivid.all() or vivid.mean() < 0.2:
+        return mask
+    high, low = values[vivid].mean(), values[~vivid].mean()
+    if high - low < separation * high:
+        return mask
+    return np.where((mask > 0) & (chroma > threshold), 255, 0).astype(np.uint8)
+
+
 class ColourModel:
     """Back-projects frames to the probability that a pixel shows the sponge.
 
@@ -102,15 +128,20 @@ class ColourModel:
 
     @classmethod
     def fit(cls, frames_bgr: list[np.ndarray], masks: list[np.ndarray], v_min: int = 40,
-            smoothing_bins: float = 1.0) -> "ColourModel":
-        """Learn the model from frames and the masks (0/255) of their sponge pixels."""
+            smoothing_bins: float = 1.0, unsure: list[np.ndarray] | None = None
+            ) -> "ColourModel":
+        """Learn the model from frames and the masks (0/255) of their sponge pixels; the
+        pixels of ``unsure`` (0/255 masks, optional) count neither as sponge nor as
+        background."""
         sponge = np.zeros((H_BINS, S_BINS), np.float32)
         background = np.zeros_like(sponge)
-        for frame, mask in zip(frames_bgr, masks):
+        if unsure is None:
+            unsure = [np.zeros_like(mask) for mask in masks]
+        for frame, mask, skip in zip(frames_bgr, masks, unsure):
             hsv = cv2.cvtColor(frame, cv2.COLOR_BGR2HSV)
             bright = cv2.inRange(hsv[..., 2], v_min, 255)
-            for hist, region in ((sponge, cv2.bitwise_and(mask, bright)),
-                                 (background, cv2.bitwise_and(cv2.bitwise_not(mask), bright))):
+            rest = cv2.bitwise_and(cv2.bitwise_not(cv2.bitwise_or(mask, skip)), bright)
+            for hist, region in ((sponge, cv2.bitwise_and(mask, bright)), (background, rest)):
                 hist += cv2.calcHist([hsv], [0, 1], region, [H_BINS, S_BINS],
                                      [0, 180, 0, 256])
         if sponge.sum() == 0:

@@ -2,10 +2,12 @@
 
 Per frame pair (paper, Sec. III-A2: colour segmentation in both cameras, 30 Hz):
 
-1. find the sponge: until it is identified, low-resolution colour blobs of both images are
-   paired into 3D candidates and followed; the one that moves like a wiping sponge is the
-   sponge (:mod:`wipelab.vision.acquisition`). Its colour is then learnt from its pixels
-   against its surroundings, and the table top's plane is measured by dense stereo around it
+1. find the sponge: until it is identified, low-resolution colour blobs of both images,
+   without the still things of the colour (a background of the recent frames tells them),
+   are paired into 3D candidates and followed; the one that moves like a wiping sponge is
+   the sponge (:mod:`wipelab.vision.acquisition`). Its colour is then learnt from the vivid
+   part of its pixels (not a duller hand or table of a near hue) against its surroundings,
+   and the table top's plane is measured by dense stereo around it
    (:mod:`wipelab.vision.table_stereo`);
 2. measure: inside a window around the predicted position, each undistorted image is
    back-projected through the colour model; the colour region nearest the prediction gives
@@ -33,7 +35,7 @@ import numpy as np
 from wipelab.vision.acquisition import (AcquisitionParams, CandidateTrack, CandidateTracks,
                                         StereoCandidate, stereo_candidates, triangulate_rays)
 from wipelab.vision.calibration import StereoCalibration
-from wipelab.vision.colour_model import ColourModel, ColourSource
+from wipelab.vision.colour_model import ColourModel, ColourSource, vivid_part
 from wipelab.vision.colour_regions import blob_mask, find_blobs, prior_model, region_moments
 from wipelab.vision.projection import invert_transform
 from wipelab.vision.static_background import StaticBackground
@@ -44,6 +46,8 @@ from wipelab.vision.undistortion import Undistorter
 QUALITY_NONE, QUALITY_CENTROID, QUALITY_MONO, QUALITY_BOX = "", "centroid", "mono", "box"
 #: Length of the largest kitchen sponge (its visible area is under this squared), metres.
 LARGEST_SPONGE = 0.16
+#: While searching for the sponge, the backgrounds are learnt again every this many frames.
+BACKGROUND_REFRESH_FRAMES = 15
 
 
 @dataclass(frozen=True)
@@ -354,10 +358,22 @@ class RegionTracker:
                   for background, frame in zip(self.backgrounds, frames)]
         for image, recent in zip(images, self._recent):
             recent.append((self.frame, image, model.back_project(image) > 0.5))
+        if len(self._recent[0]) >= self.params.acquisition.window // 2 and \
+                self.frame % BACKGROUND_REFRESH_FRAMES == 0:
+            self._learn_backgrounds(every=3)
         candidates = self._search_candidates(frames, model, images)
         self.frames_with_candidates += bool(candidates)
         self.candidates.update(self.frame, candidates)
         return self.candidates.moving(self.frame)
+
+    def _learn_backgrounds(self, every: int = 1) -> None:
+        """Start each camera's background from its recent frames (every ``every``-th): the
+        search then sees only what of the sponge's colour is not a still thing (a wooden
+        table of a near hue, a cloth, a cup), so that the moving sponge is a blob of its own."""
+        for background, recent in zip(self.backgrounds, self._recent):
+            sample = list(recent)[::every]
+            background.initialise(np.stack([image for _, image, _ in sample]),
+                                  np.stack([positive for _, _, positive in sample]))
 
     def _identify(self, frames, track: CandidateTrack) -> bool:
         """The moving candidate is the sponge if something of its colour is left where it
@@ -370,9 +386,8 @@ class RegionTracker:
         if len(self._recent[0]) < self.params.acquisition.window // 2:
             return False  # too few frames yet to tell still from moving
         path = track.recent(self.frame, self.params.acquisition.window)
-        for view, background, recent in zip(self.views, self.backgrounds, self._recent):
-            background.initialise(np.stack([image for _, image, _ in recent]),
-                                  np.stack([positive for _, _, positive in recent]))
+        self._learn_backgrounds()
+        for view, background in zip(self.views, self.backgrounds):
             # a sponge wiping a path smaller than itself is not a still thing of its colour
             pixels = np.array([view.pixel(point) for point in path])
             per_metre = view.focal / float(np.median([view.depth(point) for point in path]))
@@ -413,10 +428,12 @@ class RegionTracker:
             masks.append(region.astype(np.uint8) * 255)
             # the sponge's colour is learnt from the pixels well inside the named colour only:
             # the soft edge of the prior may take in a hand of a near hue
-            cores.append((region & (probability > 0.99)).astype(np.uint8) * 255)
+            cores.append(vivid_part(window, (region & (probability > 0.99)).astype(np.uint8) * 255))
             windows.append(window)
         if all(core.any() for core in cores):
-            self.model = ColourModel.fit(windows, cores)
+            # what of the region is not its vivid core (a duller hand, the sponge's shaded
+            # sides) is neither sponge nor background
+            self.model = ColourModel.fit(windows, cores, unsure=masks)
         elif all(mask.any() for mask in masks):
             self.model = ColourModel.fit(windows, masks)
         else:
