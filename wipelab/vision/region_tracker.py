@@ -456,7 +456,7 @@ class RegionTracker:
                                                   prior_normal=self.world_up)
         if table is None:
             return False
-        height = float(np.median(table.distance(track.recent(self.frame, 15))))
+        height = float(np.median(table.distance(np.array(list(track.points)[-15:]))))
         return height > self.params.max_height
 
     def _reacquire(self, frames) -> StereoCandidate | None:
