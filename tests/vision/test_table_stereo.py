@@ -13,7 +13,7 @@ from tests.stereo_scenes import render_scene
 from wipelab.stages.track import open_demo
 from wipelab.trajectory_csv import read_trajectory
 from wipelab.vision.projection import invert_transform, transform_points
-from wipelab.vision.table_stereo import TableStereo
+from wipelab.vision.table_stereo import TableStereo, ransac_plane
 
 SEED = 5  # a development seed: H.264, wood-like table texture
 
@@ -46,3 +46,18 @@ def test_a_point_too_near_the_cameras_gives_no_points(scene):
     calibration, frames, _, _, _ = scene
     points = TableStereo(calibration).table_points(*frames, np.array([0.0, 0.0, 0.02]))
     assert points.shape == (0, 3)
+
+
+def test_with_the_worlds_up_axis_a_wall_larger_than_the_table_is_not_the_table():
+    # a camera low over the table sees more of the wall behind it: the dominant plane of
+    # the points is the wall, but only planes near level count when the up axis is known
+    rng = np.random.default_rng(0)
+    table = np.column_stack([rng.uniform(-0.3, 0.3, 800), rng.uniform(-0.3, 0.3, 800),
+                             np.zeros(800)])
+    wall = np.column_stack([rng.uniform(-0.5, 0.5, 3000), np.full(3000, 0.4),
+                            rng.uniform(0.0, 0.6, 3000)])
+    points = np.concatenate([table, wall]) + [0.0, 0.0, 1.0]
+    up = np.array([0.0, 0.0, 1.0])
+    assert abs(ransac_plane(points, 0.004, np.random.default_rng(1))[:800].mean()) < 0.5
+    level = ransac_plane(points, 0.004, np.random.default_rng(1), towards=up)
+    assert level[:800].all() and level[800:].mean() < 0.01  # (where the wall meets it)

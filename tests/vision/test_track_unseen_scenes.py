@@ -63,6 +63,10 @@ def test_the_sponge_is_followed_and_never_reported_while_hidden(scenes, seed):
     assert np.linalg.norm(bias) < 0.05  # never a thing of its colour elsewhere on the table
     assert set(result.quality[valid]) <= {"centroid", "mono"}
     assert (result.quality[valid] == "centroid").mean() > 0.8
+    # with a world frame, the sponge slides on a level plane: the world's up is its normal
+    if demo.calibration.T_world_left is not None:
+        up = demo.calibration.T_world_left[:3, :3].T @ np.array([0.0, 0.0, 1.0])
+        assert np.allclose(tracker.region.sponge_plane().normal, up)
 
 
 def test_the_command_tracks_a_demo_without_demo_toml(scenes, tmp_path):

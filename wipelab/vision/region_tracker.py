@@ -673,17 +673,22 @@ class RegionTracker:
 
     def _refresh_plane(self, force: bool = False) -> None:
         """Recompute :meth:`sponge_plane` from the sponge's stereo points so far: on each of
-        the first 30 valid frames, then on every 10th (and whenever the table changes)."""
+        the first 30 valid frames, then on every 10th (and whenever the table changes).
+        With a world frame its up axis is the plane's normal (the table is level: a camera
+        low over it measures the table's tilt worse than its calibration knows it);
+        otherwise the table's normal, as dense stereo measures it."""
         count = len(self._stereo_points)
         if count == 0 or (not force and count > 30 and count % 10):
             return
         points = np.array(self._stereo_points)
-        if self.table is not None:
+        if self.world_up is not None:
+            self._plane = Plane(self.world_up, float(np.median(points @ self.world_up)))
+        elif self.table is not None:
             self._plane = self.table.shifted(float(np.median(self.table.distance(points))))
         elif count >= 30:
             # no table plane (a plain, untextured table): the plane of the sponge's own
-            # stereo points, pulled towards the world's up axis when there is a world frame
-            self._plane = fit_plane(points, towards=np.zeros(3), prior_normal=self.world_up)
+            # stereo points
+            self._plane = fit_plane(points, towards=np.zeros(3))
 
     def _locate(self, rays: np.ndarray, stereo: np.ndarray) -> np.ndarray:
         plane = self.sponge_plane()

@@ -23,6 +23,8 @@ DEPTH_RANGE = (0.6, 1.8)
 MAX_DISPARITIES = 96
 #: Fewest table points for a plane, and the most a plane is fitted to.
 MIN_POINTS, MAX_POINTS = 500, 20000
+#: Largest angle between the table's normal and the world's up axis (when known), radians.
+MAX_TILT = np.deg2rad(10.0)
 
 
 class TableStereo:
@@ -116,23 +118,27 @@ class TableStereo:
                         ) -> Plane | None:
         """The dominant plane of ``points`` (n, 3) within ``radius`` of ``near`` (see
         :meth:`plane_near`), pulled towards ``prior_normal`` (the world's up axis, when
-        known) by :func:`~wipelab.vision.table_plane.fit_plane`'s prior."""
+        known) by :func:`~wipelab.vision.table_plane.fit_plane`'s prior; with a prior, only
+        planes within :data:`MAX_TILT` of it count (a camera low over the table sees more of
+        the wall or the person behind it than of the table)."""
         points = points[np.linalg.norm(points - near, axis=1) < radius]
         if len(points) < MIN_POINTS:
             return None
         if len(points) > MAX_POINTS:  # evenly thinned: as good a plane, a fraction of the time
             points = points[np.linspace(0, len(points) - 1, MAX_POINTS).astype(int)]
         inliers = ransac_plane(points, tolerance=0.004 * float(np.linalg.norm(near)),
-                               rng=np.random.default_rng(seed))
+                               rng=np.random.default_rng(seed), towards=prior_normal)
         if inliers.sum() < MIN_POINTS:
             return None
         return fit_plane(points[inliers], towards=np.zeros(3), prior_normal=prior_normal)
 
 
 def ransac_plane(points: np.ndarray, tolerance: float, rng: np.random.Generator,
-                 trials: int = 100) -> np.ndarray:
+                 trials: int = 100, towards: np.ndarray | None = None) -> np.ndarray:
     """Inliers (bool (n,)) of the plane through three of ``points`` (n, 3) that has the most
-    points within ``tolerance`` metres."""
+    points within ``tolerance`` metres (of the planes whose normal lies within
+    :data:`MAX_TILT` of ``towards`` (3,), when given)."""
+    least_alignment = -1.0 if towards is None else float(np.cos(MAX_TILT))
     sample = points if len(points) <= 5000 else points[rng.choice(len(points), 5000,
                                                                    replace=False)]
     best_count, best_plane = 0, None
@@ -143,6 +149,8 @@ def ransac_plane(points: np.ndarray, tolerance: float, rng: np.random.Generator,
         if length < 1e-9:
             continue
         normal /= length
+        if towards is not None and abs(float(normal @ towards)) < least_alignment:
+            continue
         count = int(np.count_nonzero(np.abs(np.einsum("ni,i->n", sample - a, normal))
                                      < tolerance))
         if count > best_count:
