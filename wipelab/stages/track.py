@@ -24,8 +24,10 @@ Everything is checked before anything is written; bad input raises InputError.
 from __future__ import annotations
 
 import os
+import queue
 import sys
 import tempfile
+import threading
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -36,7 +38,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 from tqdm import tqdm
 
-from wipelab.errors import InputError
+from wipelab.errors import InputError, interrupts_deferred
 from wipelab.input_files import read_input_toml
 from wipelab.logs import TIMELINE, StageRecorder, stage_panels, whole_run
 from wipelab.logs.palette import XYZ_COLOURS
@@ -496,6 +498,8 @@ def _quaternions_xyzw(R: np.ndarray) -> np.ndarray:
 
 #: Widest video written for the logs when the demo's own videos cannot be logged as they are.
 PREVIEW_WIDTH = 640
+#: Frame pairs waiting for the previews' encoder at most.
+PREVIEW_QUEUE = 8
 
 
 def playable(path: Path) -> bool:
@@ -511,7 +515,8 @@ def playable(path: Path) -> bool:
 class LogVideos:
     """The two videos the logs show: the demo's own when they can be played as they are,
     else H.264 previews (at most :data:`PREVIEW_WIDTH` wide, fast x264 settings) written from
-    the frames of the tracking pass, so that nothing is decoded twice.
+    the frames of the tracking pass, so that nothing is decoded twice. The previews are
+    scaled and encoded on a thread of their own, beside the tracker.
 
     Parameters
     ----------
@@ -533,17 +538,44 @@ class LogVideos:
         self.paths = [workdir / "left.mp4", workdir / "right.mp4"]
         self._writers = [H264Writer(path, int(round(demo.reader.fps)), self.size, crf=28,
                                     preset="ultrafast") for path in self.paths]
+        self._pending: queue.Queue = queue.Queue(PREVIEW_QUEUE)
+        self._failure: BaseException | None = None
+        self._encoder = threading.Thread(target=self._encode, name="preview", daemon=True)
+        with interrupts_deferred():   # started, or not at all
+            self._encoder.start()
 
     def write(self, left: np.ndarray, right: np.ndarray) -> None:
-        """One frame pair of the tracking pass (BGR uint8, full resolution)."""
-        for writer, frame in zip(self._writers, (left, right)):
-            if self.scale < 1.0:  # a preview: linear is enough, and a few times faster
-                frame = cv2.resize(frame, self.size, interpolation=cv2.INTER_LINEAR)
-            writer.write(frame)
+        """One frame pair of the tracking pass (BGR uint8, full resolution; not to be changed
+        afterwards: they are encoded on the previews' thread)."""
+        if not self._writers:
+            return
+        if self._failure is not None:
+            raise self._failure
+        self._pending.put((left, right))
+
+    def _encode(self) -> None:
+        try:
+            while (pair := self._pending.get()) is not None:
+                for writer, frame in zip(self._writers, pair):
+                    if self.scale < 1.0:  # a preview: linear is enough, and a few times faster
+                        frame = cv2.resize(frame, self.size, interpolation=cv2.INTER_LINEAR)
+                    writer.write(frame)
+        except BaseException as error:  # raised in the tracking pass's thread
+            self._failure = error
+            while self._pending.get() is not None:  # nobody waits on a full queue
+                pass
 
     def close(self) -> None:
-        for writer in self._writers:
-            writer.close()
+        """Finish the previews (all frames written so far)."""
+        if not self._writers:
+            return
+        with interrupts_deferred():   # no thread left inside FFmpeg
+            self._pending.put(None)
+            self._encoder.join()
+            for writer in self._writers:
+                writer.close()
+        if self._failure is not None:
+            raise self._failure
 
     def calibration(self, calibration: StereoCalibration) -> StereoCalibration:
         """The calibration of the logged videos (the cameras' matrices and the image size
