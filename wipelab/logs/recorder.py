@@ -120,6 +120,8 @@ class StageRecorder:
         record (``rec.rerun.set_time("time", duration=t)``): the methods below may move it.
     mcap_path, rrd_path : pathlib.Path
     recording_id : str
+    input_hashes : dict of str
+        role -> sha256 of each input file.
     """
 
     def __init__(self, directory: str | os.PathLike, stage: str,

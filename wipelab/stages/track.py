@@ -279,7 +279,7 @@ def _write_outputs(demo: Demo, out_dir, params: TrackParams, colour: ColourSourc
                            attachments={"calibration.yaml": demo.calibration_path}) as rec:
             log_track(rec, videos.paths, result, scene, quiet)
         write_json(tmp / "manifest.json", build_manifest("track", inputs, parameters,
-                                                         params.seed))
+                                                         params.seed, rec.input_hashes))
 
 
 def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: TrackParams,
