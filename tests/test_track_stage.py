@@ -2,6 +2,8 @@
 
 import json
 import shutil
+import subprocess
+import sys
 
 import cv2
 import numpy as np
@@ -10,6 +12,7 @@ from click.testing import CliRunner
 
 from wipelab.cli import cli
 from wipelab.logs import mcap_attachments, mcap_topics, read_mcap_scalars, rrd_column
+from wipelab.stages.track import LogVideos, open_demo
 from wipelab.trajectory_csv import read_trajectory
 from wipelab.vision.calibration import load_calibration
 from wipelab.vision.projection import invert_transform
@@ -90,21 +93,38 @@ def test_track_is_deterministic(demo, tracked, tmp_path):
         assert (tmp_path / "again" / name).read_bytes() == (tracked / name).read_bytes(), name
 
 
-def test_any_opencv_readable_codec_is_tracked_and_logged_as_h264(demo, tmp_path):
+def _mpeg4_copy(demo, tmp_path):
+    """The demo with its videos re-encoded as MPEG-4 part 2, which Rerun can't play."""
     copy = _copy(demo, tmp_path)
-    for name in ("left.mp4", "right.mp4"):  # re-encode as MPEG-4 part 2, which Rerun can't play
+    for name in ("left.mp4", "right.mp4"):
         capture = cv2.VideoCapture(str(demo / name))
         writer = cv2.VideoWriter(str(copy / name), cv2.VideoWriter_fourcc(*"mp4v"), 30,
                                  (640, 480))
         while (frame := capture.read()[1]) is not None:
             writer.write(frame)
         writer.release()
+    return copy
+
+
+def test_any_opencv_readable_codec_is_tracked_and_logged_as_h264(demo, tmp_path):
+    copy = _mpeg4_copy(demo, tmp_path)
     result = CliRunner().invoke(cli, ["track", str(copy), "-o", str(tmp_path / "out"), "-q"])
     assert result.exit_code == 0, result.output
     track = read_trajectory(tmp_path / "out" / "track.csv", required=("t", "x", "y", "z"))
     assert track.valid.sum() > 30
     topics = mcap_topics(tmp_path / "out" / "track.mcap")
     assert topics["/stereo/right/video"]["message_count"] == len(track.t)
+
+
+def test_a_preview_that_cannot_be_encoded_fails_the_run(demo, tmp_path):
+    videos = LogVideos(open_demo(_mpeg4_copy(demo, tmp_path)), tmp_path)
+    frame = next(iter(open_demo(demo).reader))[0]
+    videos.write(frame, frame)
+    videos.write(frame / 255.0, frame / 255.0)   # not 8-bit: x264's input cannot be made
+    with pytest.raises(cv2.error):
+        for _ in range(20):   # the encoder's thread fails; a later frame or the end says so
+            videos.write(frame, frame)
+        videos.close()
 
 
 def _copy(demo, tmp_path):
@@ -143,3 +163,15 @@ def test_bad_input_is_one_line_exit_2_and_nothing_written(demo, tmp_path, breaka
     assert len(lines) == 1 and lines[0].startswith("error: ")
     assert __import__("re").search(message, lines[0]), lines[0]
     assert not out.exists()
+
+
+def test_the_track_command_does_not_load_the_simulator():
+    script = ("import sys, wipelab.cli, wipelab.stages.track\n"
+              "print(sorted(m for m in ('pybullet', 'wipelab.sim.world', 'wipelab.learning')"
+              " if m in sys.modules))\n"
+              "from wipelab.sim import SimWorld, build_task, load_surface\n"
+              "print(SimWorld.__module__, build_task.__module__, load_surface.__module__)\n")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split("\n")[:2] == [
+        "[]", "wipelab.sim.world wipelab.sim.task wipelab.sim.surfaces"]

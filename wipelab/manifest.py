@@ -40,16 +40,20 @@ def package_versions() -> dict[str, str]:
 
 
 def build_manifest(stage: str, inputs: dict[str, str | os.PathLike], parameters: dict[str, Any],
-                   seed: int | None = None) -> dict[str, Any]:
+                   seed: int | None = None,
+                   input_hashes: dict[str, str] | None = None) -> dict[str, Any]:
     """The manifest of one stage run.
 
     ``inputs`` maps a role ("trajectory", "left_video", ...) to a file; each is recorded with
-    its path as given and its sha256. ``parameters`` must be JSON-serialisable.
+    its path as given and its sha256 (from ``input_hashes``, role -> sha256, where the stage
+    hashed it already, e.g. :attr:`wipelab.logs.StageRecorder.input_hashes`). ``parameters``
+    must be JSON-serialisable.
     """
+    known = input_hashes or {}
     return {
         "format": "wipelab.manifest/1",
         "stage": stage,
-        "inputs": {role: {"path": str(path), "sha256": sha256_file(path)}
+        "inputs": {role: {"path": str(path), "sha256": known.get(role) or sha256_file(path)}
                    for role, path in sorted(inputs.items())},
         "parameters": parameters,
         "seed": seed,

@@ -1,12 +1,14 @@
-"""Failure handling, argument checks and speed of the recorder."""
+"""Failure handling, argument checks, speed of the recorder, the order of series in the MCAP."""
 
 import time
 
 import numpy as np
 import pytest
+from mcap.reader import make_reader
 
 from wipelab.errors import InputError
-from wipelab.logs import StageRecorder, mcap_topics, read_mcap_scalars, read_rrd_scalars
+from wipelab.logs import (StageRecorder, mcap_topics, read_mcap_scalars, read_rrd_scalars,
+                          rrd_column)
 
 
 def test_files_are_complete_when_the_with_block_raises(tmp_path):
@@ -87,3 +89,25 @@ def test_video_keeps_the_rrd_near_the_mp4_size(tmp_path, h264_clip):
     mp4 = h264_clip.stat().st_size
     assert (tmp_path / "x.rrd").stat().st_size < mp4 + 64 * 1024
     assert (tmp_path / "x.mcap").stat().st_size < mp4 + 64 * 1024
+
+
+def test_series_logged_in_time_order_lie_in_the_mcap_time_by_time(tmp_path):
+    with StageRecorder(tmp_path, "x") as rec:
+        with rec.in_time_order():
+            rec.points3d_series("/p", [0.0, 1.0, 2.0], np.zeros((5, 3)), [2, 0, 3])
+            rec.box3d_series("/b", [0.0, 1.0, 2.0], np.ones((3, 3)),
+                             [[0, 0, 0], [np.nan] * 3, [1, 2, 3]], [[0, 0, 0, 1]] * 3)
+            with pytest.raises(RuntimeError, match="do not nest"):
+                with rec.in_time_order():
+                    pass
+    with open(tmp_path / "x.mcap", "rb") as f:
+        written = [(channel.topic, message.log_time // 10**9, message.sequence)
+                   for _, channel, message in make_reader(f).iter_messages(log_time_order=False)]
+    assert written == [("/p", 0, 0), ("/b", 0, 0), ("/p", 1, 1), ("/b", 1, 1), ("/p", 2, 2),
+                       ("/b", 2, 2)]
+    t, points = rrd_column(tmp_path / "x.rrd", "/p", "Points3D:positions")
+    assert t.tolist() == [0.0, 1.0, 2.0] and [len(p) for p in points] == [2, 0, 3]
+    t, half_sizes = rrd_column(tmp_path / "x.rrd", "/b", "Boxes3D:half_sizes")
+    assert t.tolist() == [0.0, 1.0, 2.0] and half_sizes == [[[0.5] * 3], [], [[0.5] * 3]]
+    t, centres = rrd_column(tmp_path / "x.rrd", "/b", "Boxes3D:centers")
+    assert t.tolist() == [0.0, 2.0] and centres == [[[0.0, 0.0, 0.0]], [[1.0, 2.0, 3.0]]]

@@ -6,7 +6,7 @@ Topics (MCAP topic = Rerun entity; time = the session's, seconds from the first 
 * the cameras: ``/stereo/left|right/video`` (H.264 encoded as the frames arrive, Rerun
   ``VideoStream``, ``foxglove.CompressedVideo``), ``/stereo/*/calibration``, ``/stereo/*/overlay``
   (the sponge box and particles drawn over the images), ``/tf`` of the cameras;
-* the track as the track stage logs it (:func:`~wipelab.stages.track.log_track_frame`), in
+* the track as the track stage logs it (:func:`~wipelab.stages.track.log_track_frames`), in
   the frame ``demonstration`` (the demo's world, or its left camera's frame), which ``/tf``
   places in the robot's world once the demonstration area is known: the area's centre on
   the robot's wiping centre, the tracked sponge's median height on the surface. So the
@@ -23,10 +23,10 @@ Topics (MCAP topic = Rerun entity; time = the session's, seconds from the first 
   imitating, slowing down, learning, ..., wiping);
 * at ``--speed 1`` only, ``/live/latency_ms`` per frame (wall clock: a rerun differs).
 
-Series are buffered and written every :data:`STREAM_FRAMES` frames while a viewer watches
-(and the Rerun stream is flushed then: what it shows is at most that old), every
-:data:`FILE_FRAMES` otherwise. Both depend on the frame count only, so a rerun at ``--speed
-max`` writes the same bytes.
+Series and the track's drawings are buffered and written every :data:`STREAM_FRAMES` frames
+while a viewer watches (and the Rerun stream is flushed then: what it shows is at most that
+old), every :data:`FILE_FRAMES` otherwise. Both depend on the frame count only, so a rerun
+at ``--speed max`` writes the same bytes.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ from wipelab.logs.video_encoder import LiveVideoEncoder
 from wipelab.sim.kinematics import quaternion_xyzw_from_rotation
 from wipelab.sim.recording import log_scene, log_trace
 from wipelab.stages.track import (AREA_COLOUR, LEFT_FRAME, LOST, QUALITY_COLOURS, RIGHT_FRAME,
-                                  TrackScene, log_track_frame, log_track_setup)
+                                  TrackScene, log_track_frames, log_track_setup)
 from wipelab.vision.demonstration_area import DemonstrationArea
 from wipelab.vision.tracker import QUALITY_NONE
 
@@ -119,6 +119,32 @@ class _Series:
             self.t, self.rows = [], []
 
 
+class _TrackFrames:
+    """Frames of the track waiting to be drawn (:func:`~wipelab.stages.track.log_track_frames`)."""
+
+    def __init__(self):
+        self.previous: np.ndarray | None = None  # the last drawn position, if it was tracked
+        self.rows: list[tuple] = []
+
+    def add(self, index: int, t: float, pose: np.ndarray, quality: str,
+            particles: np.ndarray) -> None:
+        """One frame: ``pose`` (4,), ``particles`` (m, >= 3) (copied)."""
+        self.rows.append((index, t, np.array(pose, dtype=float), quality,
+                          np.array(particles[:, :3], dtype=float)))
+
+    def write(self, rec: StageRecorder, scene: TrackScene) -> None:
+        if not self.rows:
+            return
+        index, t, poses, quality, particles = zip(*self.rows)
+        padded = np.full((len(particles), max(len(p) for p in particles), 3), np.nan)
+        for row, frame_particles in zip(padded, particles):
+            row[:len(frame_particles)] = frame_particles
+        self.previous = log_track_frames(rec, scene, np.array(index), np.array(t),
+                                         np.array(poses), np.array(quality), padded,
+                                         self.previous)
+        self.rows = []
+
+
 @dataclass(frozen=True)
 class LearnerView:
     """What the logs show of the learner after a frame (copied: the learner goes on).
@@ -179,7 +205,7 @@ class LiveLog:
         self.streaming = streaming
         self.every = STREAM_FRAMES if streaming else FILE_FRAMES
         self.slice = STREAM_SLICE_PERIODS if streaming else FILE_SLICE_PERIODS
-        self.previous: np.ndarray | None = None
+        self.track = _TrackFrames()
         self.quality = None
         self.logged_rows = 0
         self.logged_segments = 0
@@ -246,16 +272,13 @@ class LiveLog:
         self.rec.json("/live/placement", 0.0, self.robot.placement, "wipelab.Placement")
 
     def _frame(self, t: float, pair, estimate, learner: LearnerView | None, hand_xy) -> None:
-        rec, scene = self.rec, self.scene
+        rec = self.rec
         for side, encoder, image, frame_id in zip(("left", "right"), self.encoders,
                                                   (pair.left, pair.right),
                                                   (LEFT_FRAME, RIGHT_FRAME)):
             for unit in encoder.encode(image, t):
                 rec.video_sample(f"/stereo/{side}/video", t, unit, frame_id)
-        particles = estimate.particles[:, :3] if len(estimate.particles) else np.zeros((0, 3))
-        log_track_frame(rec, scene, pair.index, t, estimate.pose, estimate.quality, particles,
-                        self.previous)
-        self.previous = estimate.pose[:3].copy() if estimate.valid else None
+        self.track.add(pair.index, t, estimate.pose, estimate.quality, estimate.particles)
         if estimate.valid:
             self.series["/track/position"].add(t, estimate.pose[:3])
             self.heights.append(float(estimate.pose[2]))
@@ -267,11 +290,10 @@ class LiveLog:
             self._learner(t, estimate, learner, hand_xy)
 
     def _dropped(self, t: float) -> None:
-        log_track_frame(self.rec, self.scene, -1, t, np.full(4, np.nan), QUALITY_NONE,
-                        np.zeros((0, 3)), None)
-        self.previous = None
+        self.track.add(-1, t, np.full(4, np.nan), QUALITY_NONE, np.zeros((0, 3)))
 
     def _scene_known(self, R_track_table: np.ndarray, region_size: float) -> None:
+        self.track.write(self.rec, self.scene)   # drawn as they were known then
         self.scene = replace(self.scene, R_track_table=R_track_table, region_size=region_size)
 
     def _learner(self, t: float, estimate, learner: LearnerView, hand_xy) -> None:
@@ -326,6 +348,7 @@ class LiveLog:
             self.rec.events("/live/events", [time], [segment.name])
 
     def _flush(self) -> None:
+        self.track.write(self.rec, self.scene)
         for topic, series in self.series.items():
             series.write(self.rec, topic)
         if self.streaming:

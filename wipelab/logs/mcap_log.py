@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import json
 import math
-from typing import Any, BinaryIO
+from contextlib import contextmanager
+from typing import Any, BinaryIO, Iterator
 
 from mcap.writer import CompressionType, IndexType, Writer
 
@@ -71,6 +72,7 @@ class McapLog:
         self._schemas: dict[tuple[str, str, bytes], int] = {}
         self._channels: dict[str, tuple[int, str, int]] = {}  # topic -> (channel id, encoding, schema id)
         self._sequence: dict[int, int] = {}
+        self._held: list[tuple[int, int, bytes]] | None = None
         self._finished = False
 
     def _schema_id(self, name: str, encoding: str, data: bytes) -> int:
@@ -113,10 +115,30 @@ class McapLog:
 
     def write(self, channel_id: int, log_time_ns: int, data: bytes) -> None:
         """One message at data time ``log_time_ns`` (also its publish time)."""
+        if self._held is not None:
+            self._held.append((channel_id, log_time_ns, data))
+            return
         sequence = self._sequence[channel_id]
         self._sequence[channel_id] = sequence + 1
         self._writer.add_message(channel_id=channel_id, log_time=log_time_ns, data=data,
                                  publish_time=log_time_ns, sequence=sequence)
+
+    @contextmanager
+    def in_time_order(self) -> Iterator[None]:
+        """Hold the messages written in the block and write them when it ends, in log-time
+        order; messages of equal times keep the order they were written in. Series written
+        one after the other (each over all its times) so come out in the file as if they
+        had been written time by time."""
+        if self._held is not None:
+            raise RuntimeError("in_time_order blocks do not nest")
+        self._held = []
+        try:
+            yield
+        finally:
+            held, self._held = self._held, None
+            held.sort(key=lambda message: message[1])
+            for channel_id, log_time_ns, data in held:
+                self.write(channel_id, log_time_ns, data)
 
     def metadata(self, name: str, values: dict[str, str]) -> None:
         self._writer.add_metadata(name=name, data={str(k): str(v) for k, v in values.items()})

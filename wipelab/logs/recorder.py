@@ -116,10 +116,12 @@ class StageRecorder:
     Attributes
     ----------
     rerun : rerun.RecordingStream
-        For anything the methods do not cover. Set the time yourself
-        (``rec.rerun.set_time("time", duration=t)``); the methods below move it too.
+        For anything the methods do not cover. Set the time yourself before each such
+        record (``rec.rerun.set_time("time", duration=t)``): the methods below may move it.
     mcap_path, rrd_path : pathlib.Path
     recording_id : str
+    input_hashes : dict of str
+        role -> sha256 of each input file.
     """
 
     def __init__(self, directory: str | os.PathLike, stage: str,
@@ -261,38 +263,86 @@ class StageRecorder:
 
     def points3d(self, topic: str, t: float, points: np.ndarray, colors=None, radii=None,
                  frame_id: str = WORLD_FRAME) -> None:
-        """Points (n, 3) in metres in ``frame_id`` at time ``t``.
+        """Points (n, 3) in metres in ``frame_id`` at time ``t``: :meth:`points3d_series` at
+        one time (``colors`` one or (n, 3|4); ``radii`` scalar or (n,))."""
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        self.points3d_series(topic, [t], points, [points.shape[0]], colors, radii, frame_id)
 
-        MCAP: ``foxglove.PointCloud`` (x, y, z float32 + rgba). Rerun: ``Points3D``.
-        ``colors``: (3,)/(4,) or (n, 3)/(n, 4), uint8 0..255 or float 0..1 (white if None);
-        ``radii``: metres, scalar or (n,) (Rerun only: Foxglove sizes points in the panel).
+    def points3d_series(self, topic: str, t: np.ndarray, points: np.ndarray, counts,
+                        colors=None, radii=None, frame_id: str = WORLD_FRAME) -> None:
+        """Points in metres in ``frame_id`` at times ``t`` (n,): the next ``counts[k]`` rows of
+        ``points`` (sum(counts), 3) at ``t[k]``.
+
+        MCAP: one ``foxglove.PointCloud`` (x, y, z float32 + rgba) per time. Rerun:
+        ``Points3D`` (one ``send_columns``). ``colors``: one colour (3,)/(4,) or one per point
+        (sum(counts), 3|4), uint8 0..255 or float 0..1 (white if None); ``radii``: metres, a
+        scalar (one for each time) or one per point (Rerun only: Foxglove sizes points in
+        the panel).
         """
         entity = _checked_topic(topic)
+        ns, index = self._time_column(t)
+        if not ns.size:
+            return
         points = np.asarray(points, dtype=float).reshape(-1, 3)
+        counts = np.asarray(counts, dtype=np.int64).reshape(-1)
+        if counts.size != ns.size or counts.sum() != points.shape[0]:
+            raise ValueError(f"{topic}: need {ns.size} counts adding up to the "
+                             f"{points.shape[0]} points")
         rgba = fx.rgba_uint8((255, 255, 255) if colors is None else colors, points.shape[0])
-        ns = self._at(t)
-        self._write(topic, ns, fx.point_cloud(ns, frame_id, points, rgba))
+        ends = np.cumsum(counts).tolist()
+        channel = self._mcap.protobuf_channel(topic, fm.PointCloud)
+        for time_ns, start, end in zip(ns.tolist(), [0, *ends[:-1]], ends):
+            self._mcap.write(channel, time_ns, fx.point_cloud(
+                time_ns, frame_id, points[start:end], rgba[start:end]).encode())
         self._place(entity, frame_id)
-        self.rerun.log(entity, rr.Points3D(points, colors=None if colors is None else rgba, radii=radii))
+        columns = list(rr.Points3D.columns(positions=points,
+                                           colors=None if colors is None else rgba
+                                           ).partition(counts))
+        if radii is not None:
+            radii = np.asarray(radii, dtype=float)
+            if radii.ndim == 0:
+                columns += rr.Points3D.columns(radii=np.full(ns.size, float(radii)))
+            else:
+                columns += rr.Points3D.columns(radii=radii).partition(counts)
+        self.rerun.send_columns(entity, indexes=index, columns=columns)
 
     def line_strip3d(self, topic: str, t: float, points: np.ndarray, color=(255, 255, 255),
                      thickness: float = 0.002, frame_id: str = WORLD_FRAME,
                      entity_id: str | None = None) -> None:
-        """A polyline through ``points`` (n, 3), metres, at time ``t``; ``thickness`` in metres.
+        """A polyline through ``points`` (n, 3), metres, at time ``t``:
+        :meth:`line_strip3d_series` at one time (``entity_id`` default: the topic)."""
+        self.line_strip3d_series(topic, [t], [points], color, thickness, frame_id,
+                                 [entity_id or topic])
 
-        MCAP: ``foxglove.SceneUpdate`` with one entity holding a LINE_STRIP; its id is
-        ``entity_id`` (default: the topic), so a strip replaces the last one with the same
-        id, and strips with ids of their own add up (a path growing piece by piece).
-        Rerun: ``LineStrips3D`` (a layout shows earlier ones with a visible time range).
+    def line_strip3d_series(self, topic: str, t: np.ndarray, strips, color=(255, 255, 255),
+                            thickness: float = 0.002, frame_id: str = WORLD_FRAME,
+                            entity_ids: Sequence[str] | None = None) -> None:
+        """One polyline per time: through ``strips[k]`` (p_k, 3), metres, at ``t[k]``;
+        ``thickness`` in metres.
+
+        MCAP: per time a ``foxglove.SceneUpdate`` with one entity holding a LINE_STRIP; its
+        id is ``entity_ids[k]`` (default: the topic), so a strip replaces the last one with
+        the same id, and strips with ids of their own add up (a path growing piece by
+        piece). Rerun: ``LineStrips3D`` (one ``send_columns``; a layout shows earlier ones
+        with a visible time range).
         """
         entity = _checked_topic(topic)
-        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        ns, index = self._time_column(t)
+        if not ns.size:
+            return
+        strips = [np.asarray(points, dtype=float).reshape(-1, 3) for points in strips]
+        ids = [topic] * ns.size if entity_ids is None else list(entity_ids)
+        if len(strips) != ns.size or len(ids) != ns.size:
+            raise ValueError(f"{topic}: need {ns.size} strips and entity ids")
         rgba = fx.rgba_uint8(color, 1)
-        ns = self._at(t)
-        self._write(topic, ns, fx.scene_line_strip(ns, frame_id, entity_id or topic, points,
-                                                   rgba[0], thickness))
+        channel = self._mcap.protobuf_channel(topic, fm.SceneUpdate)
+        for time_ns, points, entity_id in zip(ns.tolist(), strips, ids):
+            self._mcap.write(channel, time_ns, fx.scene_line_strip(
+                time_ns, frame_id, entity_id, points, rgba[0], thickness).encode())
         self._place(entity, frame_id)
-        self.rerun.log(entity, rr.LineStrips3D([points], colors=rgba, radii=thickness / 2.0))
+        self.rerun.send_columns(entity, indexes=index, columns=rr.LineStrips3D.columns(
+            strips=strips, colors=np.broadcast_to(rgba, (ns.size, 4)),
+            radii=np.full(ns.size, thickness / 2.0)))
 
     def arrow3d(self, topic: str, t: float, origin: np.ndarray, vector: np.ndarray,
                 color=(255, 64, 64), frame_id: str = WORLD_FRAME) -> None:
@@ -315,25 +365,54 @@ class StageRecorder:
     def box3d(self, topic: str, t: float, size, translation=None, q_xyzw=(0.0, 0.0, 0.0, 1.0),
               color=(240, 200, 30), frame_id: str = WORLD_FRAME) -> None:
         """A solid box of ``size`` (3,) m at ``translation`` (3,) m and orientation ``q_xyzw``
-        in ``frame_id``, at time ``t``; ``translation`` None removes it (e.g. a lost sponge).
+        in ``frame_id`` at time ``t``; ``translation`` None removes it:
+        :meth:`box3d_series` at one time."""
+        self.box3d_series(topic, [t], [size], [np.full(3, np.nan) if translation is None
+                                               else translation], [q_xyzw], color, frame_id)
 
-        MCAP: ``foxglove.SceneUpdate`` with one frame-locked entity (id = topic) holding a
-        CubePrimitive, or deleting it. Rerun: ``Boxes3D`` (empty to remove it).
+    def box3d_series(self, topic: str, t: np.ndarray, sizes, translations, q_xyzw,
+                     colors=(240, 200, 30), frame_id: str = WORLD_FRAME) -> None:
+        """One solid box per time ``t`` (n,): of ``sizes`` (n, 3) m at ``translations`` (n, 3) m
+        and orientations ``q_xyzw`` (n, 4) in ``frame_id``; a NaN translation removes it
+        (e.g. a lost sponge). ``colors``: one (3,)/(4,) or one per time (n, 3|4).
+
+        MCAP: per time a ``foxglove.SceneUpdate`` with one frame-locked entity (id = topic)
+        holding a CubePrimitive, or deleting it. Rerun: ``Boxes3D`` (an empty one removes
+        it; ``send_columns``).
         """
         entity = _checked_topic(topic)
-        rgba = fx.rgba_uint8(color, 1)[0]
-        ns = self._at(t)
-        self._place(entity, frame_id)
-        if translation is None:
-            self._write(topic, ns, fx.scene_deletion(ns, topic))
-            self.rerun.log(entity, rr.Boxes3D(half_sizes=np.zeros((0, 3))))
+        t = np.asarray(t, dtype=float)
+        ns, _ = self._time_column(t)
+        if not ns.size:
             return
-        self._write(topic, ns, fx.scene_shapes(ns, [(topic, frame_id, [
-            ("box", translation, q_xyzw, size, rgba)])]))
-        self.rerun.log(entity, rr.Boxes3D(
-            half_sizes=[0.5 * np.asarray(size, dtype=float)],
-            centers=[np.asarray(translation, dtype=float)],
-            quaternions=[fx.unit_quaternion(q_xyzw)], colors=[rgba], fill_mode="solid"))
+        sizes = np.asarray(sizes, dtype=float).reshape(-1, 3)
+        translations = np.asarray(translations, dtype=float).reshape(-1, 3)
+        q_xyzw = np.asarray(q_xyzw, dtype=float).reshape(-1, 4)
+        if not sizes.shape[0] == translations.shape[0] == q_xyzw.shape[0] == ns.size:
+            raise ValueError(f"{topic}: need {ns.size} sizes, translations and quaternions")
+        rgba = fx.rgba_uint8(colors, ns.size)
+        shown = np.isfinite(translations).all(axis=1)
+        unit = fx.unit_quaternions(q_xyzw[shown])
+        self._place(entity, frame_id)
+        channel = self._mcap.protobuf_channel(topic, fm.SceneUpdate)
+        for k, time_ns in enumerate(ns.tolist()):
+            message = fx.scene_shapes(time_ns, [(topic, frame_id, [
+                ("box", translations[k], q_xyzw[k], sizes[k], rgba[k])])]) if shown[k] \
+                else fx.scene_deletion(time_ns, topic)
+            self._mcap.write(channel, time_ns, message.encode())
+        if shown.any():
+            self.rerun.send_columns(entity, indexes=self._time_column(t[shown])[1],
+                                    columns=rr.Boxes3D.columns(
+                                        half_sizes=0.5 * sizes[shown],
+                                        centers=translations[shown], quaternions=unit,
+                                        colors=rgba[shown],
+                                        fill_mode=[rr.components.FillMode.Solid] * len(unit)))
+        if not shown.all():
+            removed = np.count_nonzero(~shown)
+            self.rerun.send_columns(entity, indexes=self._time_column(t[~shown])[1],
+                                    columns=rr.Boxes3D.columns(half_sizes=np.zeros((0, 3))
+                                                               ).partition(np.zeros(removed,
+                                                                                    int)))
 
     def shapes(self, topic: str, t: float, entities) -> None:
         """Solids attached to frames, for Foxglove's 3D panel (e.g. a robot's links): MCAP
@@ -347,21 +426,43 @@ class StageRecorder:
     def image_overlay(self, topic: str, t: float, frame_id: str, lines=(), points=(),
                       line_color=(255, 60, 60), point_color=(80, 220, 80)) -> None:
         """Drawing over a camera's images at time ``t``: line segments (m, 2, 2) and points
-        (k, 2) in pixels, origin at the top-left corner of the top-left pixel.
+        (k, 2) in pixels: :meth:`image_overlay_series` at one time."""
+        self.image_overlay_series(topic, [t], frame_id, [lines], [points], line_color,
+                                  point_color)
 
-        MCAP: ``foxglove.ImageAnnotations`` (Foxglove's Image panel draws them over the
-        camera's image topic). Rerun: ``LineStrips2D`` and ``Points2D`` in the image plane
-        of the camera whose optical frame is ``frame_id``.
+    def image_overlay_series(self, topic: str, t: np.ndarray, frame_id: str, lines, points,
+                             line_colors=(255, 60, 60), point_color=(80, 220, 80)) -> None:
+        """Drawings over a camera's images at times ``t`` (n,): line segments ``lines[k]``
+        (m_k, 2, 2) and points ``points[k]`` (p_k, 2) in pixels, origin at the top-left corner
+        of the top-left pixel; the lines' colour one (3,) or one per time (n, 3).
+
+        MCAP: one ``foxglove.ImageAnnotations`` per time (Foxglove's Image panel draws them
+        over the camera's image topic). Rerun: ``LineStrips2D`` and ``Points2D`` in the
+        image plane of the camera whose optical frame is ``frame_id`` (one ``send_columns``).
         """
         entity = _checked_topic(topic)
-        lines = np.asarray(lines, dtype=float).reshape(-1, 2, 2)
-        points = np.asarray(points, dtype=float).reshape(-1, 2)
-        line_rgba, point_rgba = fx.rgba_uint8(line_color, 1)[0], fx.rgba_uint8(point_color, 1)[0]
-        ns = self._at(t)
-        self._write(topic, ns, fx.image_annotations(ns, lines, line_rgba, points, point_rgba, 2.0))
+        ns, index = self._time_column(t)
+        if not ns.size:
+            return
+        lines = [np.asarray(segments, dtype=float).reshape(-1, 2, 2) for segments in lines]
+        points = [np.asarray(dots, dtype=float).reshape(-1, 2) for dots in points]
+        if len(lines) != ns.size or len(points) != ns.size:
+            raise ValueError(f"{topic}: need {ns.size} sets of lines and of points")
+        line_rgba = fx.rgba_uint8(line_colors, ns.size)
+        point_rgba = fx.rgba_uint8(point_color, 1)[0]
+        channel = self._mcap.protobuf_channel(topic, fm.ImageAnnotations)
+        for time_ns, segments, colour, dots in zip(ns.tolist(), lines, line_rgba, points):
+            self._mcap.write(channel, time_ns, fx.image_annotations(
+                time_ns, segments, colour, dots, point_rgba, 2.0).encode())
         self._place(entity, frame_id + IMAGE_PLANE_SUFFIX)
-        self.rerun.log(entity, rr.LineStrips2D(lines, colors=line_rgba, radii=1.0),
-                       rr.Points2D(points, colors=point_rgba, radii=1.5))
+        self.rerun.send_columns(entity, indexes=index, columns=[
+            *rr.LineStrips2D.columns(strips=np.concatenate([np.zeros((0, 2, 2)), *lines])
+                                     ).partition([len(segments) for segments in lines]),
+            *rr.LineStrips2D.columns(colors=line_rgba, radii=np.ones(ns.size)),
+            *rr.Points2D.columns(positions=np.concatenate([np.zeros((0, 2)), *points])
+                                 ).partition([len(dots) for dots in points]),
+            *rr.Points2D.columns(colors=np.broadcast_to(point_rgba, (ns.size, 4)),
+                                 radii=np.full(ns.size, 1.5))])
 
     def events(self, topic: str, t: np.ndarray, texts: Sequence[str], level: str = "info") -> None:
         """Text events (what happened when) at times ``t`` (n,) in seconds.
@@ -476,6 +577,12 @@ class StageRecorder:
                        rr.TransformAxes3D(POSE_AXIS_LENGTH))
 
     # -- whole series at once (MCAP: one message per time as above; Rerun: send_columns) ---
+    def in_time_order(self):
+        """A block whose MCAP messages are written when it ends, in time order (see
+        :meth:`~wipelab.logs.mcap_log.McapLog.in_time_order`): several series logged in it
+        one after the other lie in the file as if they had been logged time by time."""
+        return self._mcap.in_time_order()
+
     def _time_column(self, t: np.ndarray) -> tuple[np.ndarray, list]:
         ns = seconds_array_to_ns(t)
         return ns, [rr.TimeColumn(TIMELINE, duration=ns.astype("timedelta64[ns]"))]

@@ -17,10 +17,20 @@ Frames: world after REP-103 (x forward, y left, z up), ``base_link`` on the floo
 platform centre; PyBullet quaternions are (x, y, z, w). SI units.
 """
 
-from wipelab.sim.armar3 import armar3b_urdf, armar3b_urdf_path
-from wipelab.sim.surfaces import BUILTIN_SURFACES, Surface, load_surface
-from wipelab.sim.task import TaskOptions, WipingTask, build_task
-from wipelab.sim.world import BasePose, SimConfig, SimWorld
+import importlib
 
-__all__ = ["BUILTIN_SURFACES", "BasePose", "SimConfig", "SimWorld", "Surface", "TaskOptions",
-           "WipingTask", "armar3b_urdf", "armar3b_urdf_path", "build_task", "load_surface"]
+#: What the package exports, and the module that defines it: imported on first use, so that
+#: importing one module of the package (say :mod:`~wipelab.sim.kinematics`) does not start
+#: PyBullet and the rest.
+_EXPORTS = {"armar3b_urdf": "armar3", "armar3b_urdf_path": "armar3",
+            "BUILTIN_SURFACES": "surfaces", "Surface": "surfaces", "load_surface": "surfaces",
+            "TaskOptions": "task", "WipingTask": "task", "build_task": "task",
+            "BasePose": "world", "SimConfig": "world", "SimWorld": "world"}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name not in _EXPORTS:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(f"{__name__}.{_EXPORTS[name]}"), name)

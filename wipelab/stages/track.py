@@ -24,8 +24,10 @@ Everything is checked before anything is written; bad input raises InputError.
 from __future__ import annotations
 
 import os
+import queue
 import sys
 import tempfile
+import threading
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -36,7 +38,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 from tqdm import tqdm
 
-from wipelab.errors import InputError
+from wipelab.errors import InputError, interrupts_deferred
 from wipelab.input_files import read_input_toml
 from wipelab.logs import TIMELINE, StageRecorder, stage_panels, whole_run
 from wipelab.logs.palette import XYZ_COLOURS
@@ -49,7 +51,7 @@ from wipelab.vision.colour_model import NAMED_COLOURS, ColourSource, parse_hsv_r
 from wipelab.vision.demonstration_area import DemonstrationArea, measure_demonstration_area
 from wipelab.sim.kinematics import rotation_about_axis
 from wipelab.vision.projection import invert_transform
-from wipelab.vision.sponge_box import EDGES, SpongeBox, yaw_rotation
+from wipelab.vision.sponge_box import CORNER_SIGNS, EDGES, SpongeBox, yaw_rotation
 from wipelab.vision.tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_MONO, QUALITY_NONE,
                                     FrameEstimate, SpongeTracker,
                                     TrackerParams)
@@ -277,7 +279,7 @@ def _write_outputs(demo: Demo, out_dir, params: TrackParams, colour: ColourSourc
                            attachments={"calibration.yaml": demo.calibration_path}) as rec:
             log_track(rec, videos.paths, result, scene, quiet)
         write_json(tmp / "manifest.json", build_manifest("track", inputs, parameters,
-                                                         params.seed))
+                                                         params.seed, rec.input_hashes))
 
 
 def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: TrackParams,
@@ -362,6 +364,9 @@ FRUSTUM_LENGTH = 0.1
 LOST = "lost"
 QUALITY_COLOURS = {QUALITY_BOX: (40, 175, 120), QUALITY_CENTROID: (240, 150, 40),
                    QUALITY_MONO: (190, 120, 220), LOST: (200, 60, 60)}
+#: Frames whose drawings are logged at once (a chunk per entity in the .rrd; what the MCAP
+#: writer holds to write them in time order).
+LOGGED_FRAMES_AT_ONCE = 1000
 #: Thickness of the flat box drawn where only the colour region was measured, as a fraction
 #: of the region's size.
 REGION_THICKNESS = 0.15
@@ -402,27 +407,32 @@ class TrackScene:
             self.calibration.right.T_cam_ref)
         return np.stack([self.calibration.T_track_left[:3, 3], T_track_right[:3, 3]])
 
-    def box_size(self, quality: str) -> np.ndarray:
-        """Size (3,) m of what is drawn at the sponge on a frame of ``quality``: the sponge
-        box, or a flat square the size of the colour region."""
-        if quality == QUALITY_BOX and self.sponge_size is not None:
-            return np.asarray(self.sponge_size, dtype=float)
+    def box_sizes(self, quality: np.ndarray) -> np.ndarray:
+        """Sizes (n, 3) m of what is drawn at the sponge on frames of ``quality`` (n,): the
+        sponge box, or a flat square the size of the colour region."""
         side = self.region_size if np.isfinite(self.region_size) else 0.1
-        return np.array([side, side, REGION_THICKNESS * side])
+        square = np.array([side, side, REGION_THICKNESS * side])
+        if self.sponge_size is None:
+            return np.tile(square, (len(quality), 1))
+        return np.where((np.asarray(quality) == QUALITY_BOX)[:, None],
+                        np.asarray(self.sponge_size, dtype=float), square)
 
-    def sponge_rotation(self, yaw: float) -> np.ndarray:
-        """Sponge axes (3, 3) in the track frame at ``yaw`` (rad; 0 when unknown)."""
-        return self.R_track_table @ yaw_rotation(np.asarray(yaw if np.isfinite(yaw) else 0.0))
+    def sponge_rotations(self, yaw: np.ndarray) -> np.ndarray:
+        """Sponge axes (n, 3, 3) in the track frame at ``yaw`` (n,) (rad; 0 where unknown)."""
+        return self.R_track_table @ yaw_rotation(np.where(np.isfinite(yaw), yaw, 0.0))
 
-    def box_edges_px(self, pose: np.ndarray, size: np.ndarray) -> list[np.ndarray]:
-        """The 12 edges of a box of ``size`` (3,) at ``pose`` (x, y, z, yaw) projected into the
-        left and right images: two arrays (12, 2, 2) of pixels (top-left pixel corner = 0)."""
-        corners = pose[:3] + SpongeBox(*size).corners() @ self.sponge_rotation(pose[3]).T
-        return [self._pixels(camera, corners)[EDGES] for camera in self.cameras()]
+    def box_edges_px(self, poses: np.ndarray, sizes: np.ndarray) -> list[np.ndarray]:
+        """The 12 edges of boxes of ``sizes`` (n, 3) at ``poses`` (n, 4) (x, y, z, yaw)
+        projected into the left and right images: two arrays (n, 12, 2, 2) of pixels
+        (top-left pixel corner = 0)."""
+        corners = CORNER_SIGNS * (0.5 * sizes[:, None, :])
+        corners = poses[:, None, :3] + corners @ np.swapaxes(self.sponge_rotations(poses[:, 3]),
+                                                             1, 2)
+        return [self._pixels(camera, corners)[:, EDGES] for camera in self.cameras()]
 
     def particles_px(self, particles: np.ndarray) -> list[np.ndarray]:
-        """Particle centres (m, 3) in the track frame -> pixels (m, 2) in each image."""
-        return [self._pixels(camera, particles[:, :3]) for camera in self.cameras()]
+        """Particle centres (..., 3) in the track frame -> pixels (..., 2) in each image."""
+        return [self._pixels(camera, particles) for camera in self.cameras()]
 
     def cameras(self):
         return self.calibration.left, self.calibration.right
@@ -472,16 +482,24 @@ def track_blueprint(scene: TrackScene, area: DemonstrationArea, height: float) -
 
 def _quaternion_xyzw(R: np.ndarray) -> np.ndarray:
     """Unit quaternion (x, y, z, w) of a rotation matrix (3, 3)."""
-    w = np.sqrt(max(0.0, 1.0 + R[0, 0] + R[1, 1] + R[2, 2])) / 2.0
-    x = np.copysign(np.sqrt(max(0.0, 1.0 + R[0, 0] - R[1, 1] - R[2, 2])) / 2.0, R[2, 1] - R[1, 2])
-    y = np.copysign(np.sqrt(max(0.0, 1.0 - R[0, 0] + R[1, 1] - R[2, 2])) / 2.0, R[0, 2] - R[2, 0])
-    z = np.copysign(np.sqrt(max(0.0, 1.0 - R[0, 0] - R[1, 1] + R[2, 2])) / 2.0, R[1, 0] - R[0, 1])
-    q = np.array([x, y, z, w])
-    return q / np.linalg.norm(q)
+    return _quaternions_xyzw(R[None])[0]
+
+
+def _quaternions_xyzw(R: np.ndarray) -> np.ndarray:
+    """Unit quaternions (n, 4) (x, y, z, w) of rotation matrices (n, 3, 3)."""
+    R00, R11, R22 = R[:, 0, 0], R[:, 1, 1], R[:, 2, 2]
+    w = np.sqrt(np.maximum(0.0, 1.0 + R00 + R11 + R22)) / 2.0
+    x = np.copysign(np.sqrt(np.maximum(0.0, 1.0 + R00 - R11 - R22)) / 2.0, R[:, 2, 1] - R[:, 1, 2])
+    y = np.copysign(np.sqrt(np.maximum(0.0, 1.0 - R00 + R11 - R22)) / 2.0, R[:, 0, 2] - R[:, 2, 0])
+    z = np.copysign(np.sqrt(np.maximum(0.0, 1.0 - R00 - R11 + R22)) / 2.0, R[:, 1, 0] - R[:, 0, 1])
+    q = np.stack([x, y, z, w], axis=1)
+    return q / np.linalg.norm(q, axis=1, keepdims=True)
 
 
 #: Widest video written for the logs when the demo's own videos cannot be logged as they are.
 PREVIEW_WIDTH = 640
+#: Frame pairs waiting for the previews' encoder at most.
+PREVIEW_QUEUE = 8
 
 
 def playable(path: Path) -> bool:
@@ -497,7 +515,8 @@ def playable(path: Path) -> bool:
 class LogVideos:
     """The two videos the logs show: the demo's own when they can be played as they are,
     else H.264 previews (at most :data:`PREVIEW_WIDTH` wide, fast x264 settings) written from
-    the frames of the tracking pass, so that nothing is decoded twice.
+    the frames of the tracking pass, so that nothing is decoded twice. The previews are
+    scaled and encoded on a thread of their own, beside the tracker.
 
     Parameters
     ----------
@@ -519,17 +538,44 @@ class LogVideos:
         self.paths = [workdir / "left.mp4", workdir / "right.mp4"]
         self._writers = [H264Writer(path, int(round(demo.reader.fps)), self.size, crf=28,
                                     preset="ultrafast") for path in self.paths]
+        self._pending: queue.Queue = queue.Queue(PREVIEW_QUEUE)
+        self._failure: BaseException | None = None
+        self._encoder = threading.Thread(target=self._encode, name="preview", daemon=True)
+        with interrupts_deferred():   # started, or not at all
+            self._encoder.start()
 
     def write(self, left: np.ndarray, right: np.ndarray) -> None:
-        """One frame pair of the tracking pass (BGR uint8, full resolution)."""
-        for writer, frame in zip(self._writers, (left, right)):
-            if self.scale < 1.0:  # a preview: linear is enough, and a few times faster
-                frame = cv2.resize(frame, self.size, interpolation=cv2.INTER_LINEAR)
-            writer.write(frame)
+        """One frame pair of the tracking pass (BGR uint8, full resolution; not to be changed
+        afterwards: they are encoded on the previews' thread)."""
+        if not self._writers:
+            return
+        if self._failure is not None:
+            raise self._failure
+        self._pending.put((left, right))
+
+    def _encode(self) -> None:
+        try:
+            while (pair := self._pending.get()) is not None:
+                for writer, frame in zip(self._writers, pair):
+                    if self.scale < 1.0:  # a preview: linear is enough, and a few times faster
+                        frame = cv2.resize(frame, self.size, interpolation=cv2.INTER_LINEAR)
+                    writer.write(frame)
+        except BaseException as error:  # raised in the tracking pass's thread
+            self._failure = error
+            while self._pending.get() is not None:  # nobody waits on a full queue
+                pass
 
     def close(self) -> None:
-        for writer in self._writers:
-            writer.close()
+        """Finish the previews (all frames written so far)."""
+        if not self._writers:
+            return
+        with interrupts_deferred():   # no thread left inside FFmpeg
+            self._pending.put(None)
+            self._encoder.join()
+            for writer in self._writers:
+                writer.close()
+        if self._failure is not None:
+            raise self._failure
 
     def calibration(self, calibration: StereoCalibration) -> StereoCalibration:
         """The calibration of the logged videos (the cameras' matrices and the image size
@@ -559,41 +605,54 @@ def log_track_setup(rec: StageRecorder, scene: TrackScene) -> None:
                                frame_id, image_plane_distance=FRUSTUM_LENGTH)
 
 
-def log_track_frame(rec: StageRecorder, scene: TrackScene, index: int, t: float,
-                    pose: np.ndarray, quality: str, particles: np.ndarray,
-                    previous: np.ndarray | None) -> None:
-    """One frame: the sponge box (a flat square the size of the colour region where only
-    that was measured; removed while lost), the particles, the new piece of the trajectory
-    (from ``previous``, the last frame's position if it was tracked) and the same drawn over
-    both images.
+def log_track_frames(rec: StageRecorder, scene: TrackScene, index: np.ndarray, t: np.ndarray,
+                     poses: np.ndarray, quality: np.ndarray, particles: np.ndarray,
+                     previous: np.ndarray | None = None) -> np.ndarray | None:
+    """Frames ``index`` (n,) at times ``t`` (n,) s, all at once: per frame the sponge box (a
+    flat square the size of the colour region where only that was measured; removed while
+    lost), the particles, the new piece of the trajectory (from the frame before, if it was
+    tracked) and the same drawn over both images.
 
-    ``pose`` (4,) x, y, z (m) and yaw (rad) in the track frame; ``quality`` ``box``,
-    ``centroid`` or ``""`` (lost); ``particles`` (m, >= 3) their positions first (NaN rows
-    are skipped).
+    ``poses`` (n, 4) x, y, z (m) and yaw (rad) in the track frame; ``quality`` (n,) ``box``,
+    ``centroid``, ``mono`` or ``""`` (lost); ``particles`` (n, m, >= 3) their positions first
+    (NaN rows are skipped); ``previous`` (3,) the position of the frame before the first if
+    it was tracked, else None. Returns the same for the frame after the last.
     """
-    particles = particles[np.isfinite(particles[:, 0])]
-    if len(particles):
-        rec.points3d("/track/particles", t, particles[:, :3], colors=PARTICLE_COLOUR,
-                     radii=0.0015, frame_id=scene.frame)
+    if not len(t):
+        return previous
     valid = quality != QUALITY_NONE
-    colour = SPONGE_COLOUR if quality == QUALITY_BOX else QUALITY_COLOURS[QUALITY_CENTROID]
-    if valid:
-        size = scene.box_size(quality)
-        rec.box3d("/track/sponge", t, size, pose[:3],
-                  _quaternion_xyzw(scene.sponge_rotation(pose[3])), color=colour,
-                  frame_id=scene.frame)
-        if previous is not None:
-            rec.line_strip3d("/track/trajectory", t, np.stack([previous, pose[:3]]),
-                             color=TRAJECTORY_COLOUR, frame_id=scene.frame,
-                             entity_id=f"/track/trajectory/{index}")
-    else:
-        rec.box3d("/track/sponge", t, np.zeros(3), None, frame_id=scene.frame)
-    edges = scene.box_edges_px(pose, size) if valid else [np.zeros((0, 2, 2))] * 2
-    dots = scene.particles_px(particles) if len(particles) else [np.zeros((0, 2))] * 2
-    for side, frame_id, lines, points in zip(("left", "right"), (LEFT_FRAME, RIGHT_FRAME),
-                                             edges, dots):
-        rec.image_overlay(f"/stereo/{side}/overlay", t, frame_id, lines,
-                          points[np.isfinite(points).all(axis=1)], colour, PARTICLE_COLOUR)
+    positions = np.where(valid[:, None], poses[:, :3], np.nan)
+    particles = particles[:, :, :3]
+    finite = np.isfinite(particles[:, :, 0])
+    counts = finite.sum(axis=1)
+    drawn = counts > 0
+    colours = np.where((quality == QUALITY_BOX)[:, None], SPONGE_COLOUR,
+                       QUALITY_COLOURS[QUALITY_CENTROID])
+    sizes = scene.box_sizes(quality)
+    before = np.vstack([np.full((1, 3), np.nan) if previous is None else previous,
+                        positions[:-1]])
+    piece = valid & np.isfinite(before).all(axis=1)
+    edges = scene.box_edges_px(poses, sizes)
+    dots = scene.particles_px(particles)
+    with rec.in_time_order():   # in the MCAP frame by frame, as they are shown
+        rec.points3d_series("/track/particles", t[drawn], particles[finite], counts[drawn],
+                            colors=PARTICLE_COLOUR, radii=0.0015, frame_id=scene.frame)
+        rec.box3d_series("/track/sponge", t, sizes, positions,
+                         _quaternions_xyzw(scene.sponge_rotations(poses[:, 3])), colours,
+                         frame_id=scene.frame)
+        rec.line_strip3d_series("/track/trajectory", t[piece],
+                                np.stack([before[piece], positions[piece]], axis=1),
+                                color=TRAJECTORY_COLOUR, frame_id=scene.frame,
+                                entity_ids=[f"/track/trajectory/{k}" for k in index[piece]])
+        for side, frame_id, lines, points in zip(("left", "right"), (LEFT_FRAME, RIGHT_FRAME),
+                                                 edges, dots):
+            rec.image_overlay_series(
+                f"/stereo/{side}/overlay", t, frame_id,
+                [frame_lines if shown else frame_lines[:0]
+                 for frame_lines, shown in zip(lines, valid)],
+                [frame_points[np.isfinite(frame_points).all(axis=1)] for frame_points in points],
+                colours, PARTICLE_COLOUR)
+    return positions[-1] if valid[-1] else None
 
 
 def log_track(rec: StageRecorder, videos: list[Path], result: TrackResult, scene: TrackScene,
@@ -635,11 +694,14 @@ def log_track(rec: StageRecorder, videos: list[Path], result: TrackResult, scene
                      np.column_stack([rectangle, np.full(5, height_mean)]), color=AREA_COLOUR,
                      frame_id=scene.frame)
     previous = None
-    for k in tqdm(range(len(t)), desc="logs", unit="frame", disable=quiet, file=sys.stderr,
-                  leave=False):
-        log_track_frame(rec, scene, k, float(t[k]), result.poses[k], str(result.quality[k]),
-                        result.particles[k], previous)
-        previous = result.poses[k, :3] if valid[k] else None
+    with tqdm(total=len(t), desc="logs", unit="frame", disable=quiet, file=sys.stderr,
+              leave=False) as bar:
+        for start in range(0, len(t), LOGGED_FRAMES_AT_ONCE):
+            block = slice(start, start + LOGGED_FRAMES_AT_ONCE)
+            previous = log_track_frames(rec, scene, np.arange(len(t))[block], t[block],
+                                        result.poses[block], result.quality[block],
+                                        result.particles[block], previous)
+            bar.update(len(t[block]))
 
 
 def _five(D: np.ndarray) -> np.ndarray:

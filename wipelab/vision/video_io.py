@@ -113,7 +113,8 @@ class StereoVideoReader:
         return self.left.fps
 
     def __iter__(self) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-        """Yield (left, right) BGR uint8 frames, shape (h, w, 3) each.
+        """Yield (left, right) BGR uint8 frames, shape (h, w, 3) each, read-only (whoever
+        gets them may hand them on, e.g. to a thread encoding them, while others use them).
 
         The decoders stop when the iteration ends, fails or is interrupted, and at the
         latest when the program exits (a decoder thread still inside FFmpeg then would
@@ -128,6 +129,7 @@ class StereoVideoReader:
                     if frame is None:
                         raise InputError(f"{info.path}: truncated, decoding stopped at frame "
                                          f"{index} of {info.frame_count}")
+                    frame.flags.writeable = False
                 yield frames[0], frames[1]
         finally:
             decoders.stop()
