@@ -9,7 +9,7 @@ import pytest
 from wipelab.stages.track import TrackParams, run_tracker
 from wipelab.vision.box_tracker import _View
 from wipelab.vision.calibration import load_calibration
-from wipelab.vision.colour_model import ColourSource
+from wipelab.vision.colour_model import ColourSource, vivid_part
 from wipelab.vision.projection import invert_transform, transform_points
 from wipelab.vision.sponge_box import SpongeBox
 from wipelab.vision.tracker import SpongeTracker, TrackerParams
@@ -62,13 +62,20 @@ def test_colour_region_alone_tracks_the_shape_of_the_movement(region_only, short
 
 
 def test_a_known_sponge_size_gives_the_box_centre(with_box, short_truth):
-    poses, valid, quality, _ = with_box
+    poses, valid, quality, tracker = with_box
     t, centre, visible = short_truth
     assert valid[visible == 1].mean() > 0.97
     assert (quality[valid] == "box").mean() > 0.9
     error = np.linalg.norm(poses[valid, :3] - centre[valid], axis=1)
     assert np.sqrt(np.mean(error ** 2)) < 0.004
     assert np.median(error) < 0.003
+    # the box's outline is scored on the colour of all the sponge's faces, its shaded sides
+    # too, not only on the vivid part the region's centre is measured on
+    region = tracker.region
+    for window, mask in zip(region.seed_windows, region.seed_masks):
+        shaded = (mask > 0) & ~(vivid_part(window, mask) > 0)
+        assert shaded.sum() > 100
+        assert region.body_model.back_project(window)[shaded].mean() > 0.9
 
 
 @pytest.mark.parametrize("run", ["region_only", "with_box"])

@@ -230,7 +230,10 @@ class RegionTracker:
         self.backgrounds = [StaticBackground(view.undistorter, search_scale)
                             for view in self.views]
         self.prior = prior_model(colour.hsv_range) if colour.hsv_range is not None else None
-        self.model: ColourModel | None = None
+        self.model: ColourModel | None = None  # the sponge's vivid body: what is tracked
+        #: the colour of all the sponge's faces, lit and shaded (what a box model's outline
+        #: is scored on)
+        self.body_model: ColourModel | None = None
         self.candidates = CandidateTracks(params.acquisition)
         self.table_stereo = TableStereo(calibration)
         world_up = None
@@ -428,21 +431,27 @@ class RegionTracker:
             masks.append(region.astype(np.uint8) * 255)
             # the sponge's colour is learnt from the pixels well inside the named colour only:
             # the soft edge of the prior may take in a hand of a near hue
-            cores.append(vivid_part(window, (region & (probability > 0.99)).astype(np.uint8) * 255))
+            cores.append((region & (probability > 0.99)).astype(np.uint8) * 255)
             windows.append(window)
-        if all(core.any() for core in cores):
-            # what of the region is not its vivid core (a duller hand, the sponge's shaded
-            # sides) is neither sponge nor background
-            self.model = ColourModel.fit(windows, cores, unsure=masks)
-        elif all(mask.any() for mask in masks):
-            self.model = ColourModel.fit(windows, masks)
-        else:
-            self.model = self.prior
+        self.body_model = self._colour(windows, cores, masks)
+        # the region's centre is measured on its vivid part: what else the region holds (a
+        # duller hand, the sponge's shaded sides) is neither sponge nor background
+        self.model = self._colour(windows, [vivid_part(window, core) for window, core
+                                            in zip(windows, cores)], masks, unsure=masks)
         self.history.append((self.frame - 1, point.copy()))
         self.seed_windows, self.seed_masks = windows, masks
         self._table_centre = point.copy()
         self._measure_table(None if self._table_points else frames)
         return True
+
+    def _colour(self, windows, cores, masks, unsure=None) -> ColourModel:
+        """The colour model of the sponge's pixels ``cores`` in both cameras' windows (of its
+        whole region ``masks`` when a camera shows no core; the prior when neither)."""
+        if all(core.any() for core in cores):
+            return ColourModel.fit(windows, cores, unsure=unsure)
+        if all(mask.any() for mask in masks):
+            return ColourModel.fit(windows, masks)
+        return self.prior
 
     def _above_the_table(self, frames, track: CandidateTrack) -> bool:
         """Whether a moving candidate keeps above the table (by dense stereo around it): a

@@ -232,7 +232,7 @@ class SpongeTracker:
             # before the first fit: the box centre half the sponge's height above the table
             height = self.params.sponge.height / 2 - float(region.table.distance(centre_left))
             centre_left = centre_left + height * region.table.normal
-        self.box.start(region.model, self.feature, R_track_table,
+        self.box.start(region.body_model, self.feature, R_track_table,
                        transform_points(self.T_track_left, centre_left))
 
     def _particles(self) -> np.ndarray:
