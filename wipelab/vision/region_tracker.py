@@ -825,7 +825,11 @@ class RegionTracker:
         ``still_seconds`` (seen in most of those frames)."""
         p = self.params
         window = int(round(p.still_seconds * p.acquisition.fps))
-        recent = [q for f, q in self._valid_points if self.frame - f < window] + [point]
+        recent = [point]
+        for f, q in reversed(self._valid_points):  # the newest first
+            if self.frame - f >= window:
+                break
+            recent.append(q)
         if len(recent) < 0.8 * window:
             return False
         recent = np.array(recent)

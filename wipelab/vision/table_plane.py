@@ -21,6 +21,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
+
+from wipelab.numba_cache import forget_stale_kernels
 
 
 @dataclass(frozen=True)
@@ -169,39 +172,93 @@ def points_on_plane(plane: Plane, rays: list[np.ndarray], cameras: list[tuple[np
     ndarray, shape (n, 3)
         Points in the plane's frame; NaN where no camera measured.
     """
-    n = len(rays[0])
     origin, e1, e2 = plane.basis()
-    starts = []
-    for ray, (R, t, _) in zip(rays, cameras):
-        eye = -R.T @ t
-        starts.append(plane.intersect(np.broadcast_to(eye, (n, 3)), ray @ R))
-    with np.errstate(invalid="ignore"):
-        start = np.nanmean(np.stack(starts), axis=0) if len(starts) > 1 else starts[0]
-    a, b = (start - origin) @ e1, (start - origin) @ e2
-    for _ in range(iterations):
-        X = origin + a[:, None] * e1 + b[:, None] * e2
-        # normal equations of the 2 x 2 least squares, summed over the cameras
-        aa, ab, bb, ga, gb = (np.zeros(n) for _ in range(5))
-        for ray, (R, t, focal) in zip(rays, cameras):
-            seen = np.isfinite(ray[:, 0])
-            camera = X @ R.T + t
-            z = camera[:, 2]
-            x, y = camera[:, 0] / z, camera[:, 1] / z
-            residual_x = np.where(seen, focal * (x - ray[:, 0]), 0.0)
-            residual_y = np.where(seen, focal * (y - ray[:, 1]), 0.0)
-            weight = np.where(seen, focal / z, 0.0)
-            d1, d2 = R @ e1, R @ e2
-            # d(projection)/d(a), d(projection)/d(b), in pixels
-            ja_x, ja_y = weight * (d1[0] - x * d1[2]), weight * (d1[1] - y * d1[2])
-            jb_x, jb_y = weight * (d2[0] - x * d2[2]), weight * (d2[1] - y * d2[2])
-            aa += ja_x * ja_x + ja_y * ja_y
-            ab += ja_x * jb_x + ja_y * jb_y
-            bb += jb_x * jb_x + jb_y * jb_y
-            ga += ja_x * residual_x + ja_y * residual_y
-            gb += jb_x * residual_x + jb_y * residual_y
-        determinant = aa * bb - ab * ab
-        solvable = np.abs(determinant) > 1e-12
-        safe = np.where(solvable, determinant, 1.0)
-        a = a - np.where(solvable, (bb * ga - ab * gb) / safe, 0.0)
-        b = b - np.where(solvable, (aa * gb - ab * ga) / safe, 0.0)
-    return origin + a[:, None] * e1 + b[:, None] * e2
+    return _gauss_newton_on_plane(
+        origin, e1, e2, np.asarray(plane.normal, np.float64), float(plane.offset),
+        np.ascontiguousarray(np.stack(rays), dtype=np.float64),
+        np.ascontiguousarray(np.stack([R for R, _, _ in cameras]), dtype=np.float64),
+        np.ascontiguousarray(np.stack([t for _, t, _ in cameras]), dtype=np.float64),
+        np.array([float(f) for _, _, f in cameras]), int(iterations))
+
+
+@njit(cache=True)
+def _gauss_newton_on_plane(origin, e1, e2, normal, offset, rays, rotations, translations,
+                           focals, iterations):
+    """:func:`points_on_plane`, compiled: rays (cameras, n, 3), rotations (cameras, 3, 3),
+    translations (cameras, 3), focals (cameras,) -> points (n, 3). Each frame's point starts
+    where the mean of its rays meets the plane; each Gauss-Newton step solves the 2 x 2
+    normal equations of the pixel residuals in the plane's coordinates (a, b)."""
+    cameras, n = rays.shape[0], rays.shape[1]
+    points = np.full((n, 3), np.nan)
+    for i in range(n):
+        start = np.zeros(3)
+        count = 0
+        for c in range(cameras):
+            ray = rays[c, i]
+            if not np.isfinite(ray[0]):
+                continue
+            R = rotations[c]
+            eye = -_rotate_back(R, translations[c])
+            direction = _rotate_back(R, ray)
+            along = _dot3(direction, normal)
+            if abs(along) <= 1e-12:
+                continue
+            start += eye + (offset - _dot3(eye, normal)) / along * direction
+            count += 1
+        if count == 0:
+            continue
+        start /= count
+        a, b = _dot3(start - origin, e1), _dot3(start - origin, e2)
+        for _ in range(iterations):
+            X = origin + a * e1 + b * e2
+            aa = ab = bb = ga = gb = 0.0
+            for c in range(cameras):
+                ray = rays[c, i]
+                if not np.isfinite(ray[0]):
+                    continue
+                R, focal = rotations[c], focals[c]
+                camera = _rotate(R, X) + translations[c]
+                z = camera[2]
+                x, y = camera[0] / z, camera[1] / z
+                residual_x, residual_y = focal * (x - ray[0]), focal * (y - ray[1])
+                weight = focal / z
+                d1, d2 = _rotate(R, e1), _rotate(R, e2)
+                # d(projection)/d(a), d(projection)/d(b), in pixels
+                ja_x, ja_y = weight * (d1[0] - x * d1[2]), weight * (d1[1] - y * d1[2])
+                jb_x, jb_y = weight * (d2[0] - x * d2[2]), weight * (d2[1] - y * d2[2])
+                aa += ja_x * ja_x + ja_y * ja_y
+                ab += ja_x * jb_x + ja_y * jb_y
+                bb += jb_x * jb_x + jb_y * jb_y
+                ga += ja_x * residual_x + ja_y * residual_y
+                gb += jb_x * residual_x + jb_y * residual_y
+            determinant = aa * bb - ab * ab
+            if abs(determinant) > 1e-12:
+                a -= (bb * ga - ab * gb) / determinant
+                b -= (aa * gb - ab * ga) / determinant
+        points[i] = origin + a * e1 + b * e2
+    return points
+
+
+@njit(cache=True)
+def _dot3(u, v):
+    """``u @ v`` for 3-vectors, without BLAS."""
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
+@njit(cache=True)
+def _rotate(R, v):
+    """``R @ v`` for a 3 x 3 matrix, without BLAS."""
+    return np.array([R[0, 0] * v[0] + R[0, 1] * v[1] + R[0, 2] * v[2],
+                     R[1, 0] * v[0] + R[1, 1] * v[1] + R[1, 2] * v[2],
+                     R[2, 0] * v[0] + R[2, 1] * v[1] + R[2, 2] * v[2]])
+
+
+@njit(cache=True)
+def _rotate_back(R, v):
+    """``R.T @ v`` for a 3 x 3 matrix, without BLAS."""
+    return np.array([R[0, 0] * v[0] + R[1, 0] * v[1] + R[2, 0] * v[2],
+                     R[0, 1] * v[0] + R[1, 1] * v[1] + R[2, 1] * v[2],
+                     R[0, 2] * v[0] + R[1, 2] * v[1] + R[2, 2] * v[2]])
+
+
+forget_stale_kernels(__name__)
