@@ -132,6 +132,7 @@ class SpongeTracker:
         self.T_left_track = invert_transform(self.T_track_left)
         self.feature: LinearColourFeature | None = None
         self.offsets: deque[np.ndarray] = deque(maxlen=30)  # box centre - region point, left
+        self._median_offset: np.ndarray | None = None
         self.frame = -1
 
     @property
@@ -204,14 +205,18 @@ class SpongeTracker:
             areas = region.areas
             if region.valid:
                 self.offsets.append(centre_left - region.point)
+                self._median_offset = None
         else:
             self.region.observe(centre_left - self._offset())
         return FrameEstimate(box.pose, True, QUALITY_BOX, areas, box.particles)
 
     def _offset(self) -> np.ndarray:
         """Box centre minus region point (3,), left frame: median over recent frames, 0
-        before the box ever fitted."""
-        return np.median(np.array(self.offsets), axis=0) if self.offsets else np.zeros(3)
+        before the box ever fitted (computed again only when a new offset came in)."""
+        if self._median_offset is None:
+            self._median_offset = np.median(np.array(self.offsets), axis=0) if self.offsets \
+                else np.zeros(3)
+        return self._median_offset
 
     def _start_box(self, left, right, centre_left: np.ndarray) -> None:
         """Seed the box refinement at the region's estimate (and learn the colour feature the
