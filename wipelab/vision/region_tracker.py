@@ -48,6 +48,8 @@ QUALITY_NONE, QUALITY_CENTROID, QUALITY_MONO, QUALITY_BOX = "", "centroid", "mon
 LARGEST_SPONGE = 0.16
 #: While searching for the sponge, the backgrounds are learnt again every this many frames.
 BACKGROUND_REFRESH_FRAMES = 15
+#: ... from this many of the recent frames.
+BACKGROUND_FRAMES = 12
 
 
 @dataclass(frozen=True)
@@ -363,20 +365,27 @@ class RegionTracker:
             recent.append((self.frame, image, model.back_project(image) > 0.5))
         if len(self._recent[0]) >= self.params.acquisition.window // 2 and \
                 self.frame % BACKGROUND_REFRESH_FRAMES == 0:
-            self._learn_backgrounds(every=3)
+            # one camera at a time, from a dozen of the recent frames: a few milliseconds,
+            # not a stall of a live session
+            camera = (self.frame // BACKGROUND_REFRESH_FRAMES) % 2
+            self._learn_backgrounds(cameras=(camera,), frames=BACKGROUND_FRAMES)
         candidates = self._search_candidates(frames, model, images)
         self.frames_with_candidates += bool(candidates)
         self.candidates.update(self.frame, candidates)
         return self.candidates.moving(self.frame)
 
-    def _learn_backgrounds(self, every: int = 1) -> None:
-        """Start each camera's background from its recent frames (every ``every``-th): the
-        search then sees only what of the sponge's colour is not a still thing (a wooden
-        table of a near hue, a cloth, a cup), so that the moving sponge is a blob of its own."""
-        for background, recent in zip(self.backgrounds, self._recent):
-            sample = list(recent)[::every]
-            background.initialise(np.stack([image for _, image, _ in sample]),
-                                  np.stack([positive for _, _, positive in sample]))
+    def _learn_backgrounds(self, cameras: tuple[int, ...] = (0, 1),
+                           frames: int | None = None) -> None:
+        """Start the ``cameras``' backgrounds from their recent frames (all of them, or
+        ``frames`` spread evenly over them): the search then sees only what of the sponge's
+        colour is not a still thing (a wooden table of a near hue, a cloth, a cup), so that
+        the moving sponge is a blob of its own."""
+        for camera in cameras:
+            background, recent = self.backgrounds[camera], list(self._recent[camera])
+            if frames is not None and len(recent) > frames:
+                recent = [recent[i] for i in np.linspace(0, len(recent) - 1, frames).astype(int)]
+            background.initialise(np.stack([image for _, image, _ in recent]),
+                                  np.stack([positive for _, _, positive in recent]))
 
     def _identify(self, frames, track: CandidateTrack) -> bool:
         """The moving candidate is the sponge if something of its colour is left where it
