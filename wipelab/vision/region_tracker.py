@@ -699,10 +699,9 @@ class RegionTracker:
         if count == 0 or (not force and count > 30 and count % 10):
             return
         points = np.array(self._stereo_points)
-        if self.world_up is not None:
-            self._plane = Plane(self.world_up, float(np.median(points @ self.world_up)))
-        elif self.table is not None:
-            self._plane = self.table.shifted(float(np.median(self.table.distance(points))))
+        level = self.table if self.world_up is None else Plane(self.world_up, 0.0)
+        if level is not None:
+            self._plane = level.shifted(float(np.median(level.distance(points))))
         elif count >= 30:
             # no table plane (a plain, untextured table): the plane of the sponge's own
             # stereo points

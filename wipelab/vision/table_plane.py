@@ -189,6 +189,11 @@ def _gauss_newton_on_plane(origin, e1, e2, normal, offset, rays, rotations, tran
     where the mean of its rays meets the plane; each Gauss-Newton step solves the 2 x 2
     normal equations of the pixel residuals in the plane's coordinates (a, b)."""
     cameras, n = rays.shape[0], rays.shape[1]
+    # per camera: its centre, and the plane's axes in its frame
+    eyes, d1s, d2s = np.empty((cameras, 3)), np.empty((cameras, 3)), np.empty((cameras, 3))
+    for c in range(cameras):
+        eyes[c] = -_rotate_back(rotations[c], translations[c])
+        d1s[c], d2s[c] = _rotate(rotations[c], e1), _rotate(rotations[c], e2)
     points = np.full((n, 3), np.nan)
     for i in range(n):
         start = np.zeros(3)
@@ -197,9 +202,8 @@ def _gauss_newton_on_plane(origin, e1, e2, normal, offset, rays, rotations, tran
             ray = rays[c, i]
             if not np.isfinite(ray[0]):
                 continue
-            R = rotations[c]
-            eye = -_rotate_back(R, translations[c])
-            direction = _rotate_back(R, ray)
+            eye = eyes[c]
+            direction = _rotate_back(rotations[c], ray)
             along = _dot3(direction, normal)
             if abs(along) <= 1e-12:
                 continue
@@ -222,7 +226,7 @@ def _gauss_newton_on_plane(origin, e1, e2, normal, offset, rays, rotations, tran
                 x, y = camera[0] / z, camera[1] / z
                 residual_x, residual_y = focal * (x - ray[0]), focal * (y - ray[1])
                 weight = focal / z
-                d1, d2 = _rotate(R, e1), _rotate(R, e2)
+                d1, d2 = d1s[c], d2s[c]
                 # d(projection)/d(a), d(projection)/d(b), in pixels
                 ja_x, ja_y = weight * (d1[0] - x * d1[2]), weight * (d1[1] - y * d1[2])
                 jb_x, jb_y = weight * (d2[0] - x * d2[2]), weight * (d2[1] - y * d2[2])

@@ -138,7 +138,7 @@ def ransac_plane(points: np.ndarray, tolerance: float, rng: np.random.Generator,
     """Inliers (bool (n,)) of the plane through three of ``points`` (n, 3) that has the most
     points within ``tolerance`` metres (of the planes whose normal lies within
     :data:`MAX_TILT` of ``towards`` (3,), when given)."""
-    least_alignment = -1.0 if towards is None else float(np.cos(MAX_TILT))
+    least_alignment = float(np.cos(MAX_TILT))
     sample = points if len(points) <= 5000 else points[rng.choice(len(points), 5000,
                                                                    replace=False)]
     best_count, best_plane = 0, None
