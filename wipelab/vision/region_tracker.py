@@ -50,6 +50,8 @@ LARGEST_SPONGE = 0.16
 BACKGROUND_REFRESH_FRAMES = 15
 #: ... from this many of the recent frames.
 BACKGROUND_FRAMES = 12
+#: ... and from this many when a moving candidate is checked (both cameras at once).
+IDENTIFY_BACKGROUND_FRAMES = 24
 
 
 @dataclass(frozen=True)
@@ -292,6 +294,14 @@ class RegionTracker:
             recent.clear()
         self._last_seen = None  # the pass starts where the video starts, not where it ended
 
+    def prepare(self) -> None:
+        """Load the compiled plane fit now: numba's first call in a process takes ~0.3 s,
+        which a live session spends before its clock starts rather than on the first frame
+        after the sponge is found."""
+        level = Plane(np.array([0.0, 0.0, 1.0]), 1.0)
+        cameras = [(view.R, view.t, view.focal) for view in self.views]
+        points_on_plane(level, [np.array([[0.0, 0.0, 1.0]])] * 2, cameras)
+
     def observe(self, point: np.ndarray) -> None:
         """Take this frame's sponge point (3,), left optical frame, from elsewhere (the box
         refinement) instead of measuring it: keeps the prediction going."""
@@ -398,7 +408,7 @@ class RegionTracker:
         if len(self._recent[0]) < self.params.acquisition.window // 2:
             return False  # too few frames yet to tell still from moving
         path = track.recent(self.frame, self.params.acquisition.window)
-        self._learn_backgrounds()
+        self._learn_backgrounds(frames=IDENTIFY_BACKGROUND_FRAMES)
         for view, background in zip(self.views, self.backgrounds):
             # a sponge wiping a path smaller than itself is not a still thing of its colour
             pixels = np.array([view.pixel(point) for point in path])
