@@ -161,6 +161,9 @@ def _stride(n_samples: int, max_samples: int) -> int:
 
 #: Fewest periods of a sub-multiple f/2, f/3 a recording must hold for it to be tried.
 SUBMULTIPLE_MIN_PERIODS = 3.0
+#: A sub-multiple f/d wins when it explains at least this share of the variance that f leaves
+#: unexplained: all of it for a figure eight, little for a person's wandering tempo and drift.
+SUBMULTIPLE_SHARE = 0.5
 
 
 def fundamental_frequency_hz(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz: float,
@@ -171,8 +174,11 @@ def fundamental_frequency_hz(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz
     The search runs on at most ``max_search_samples`` evenly strided samples (the frequency's
     precision comes from the duration, not the rate); the returned fit uses every sample.
     After refining the spectral estimate f, the sub-multiples f/2 and f/3 are tried: if one
-    explains clearly more of the variance (> 2 % more), the DOFs share a longer period (e.g. a
-    figure eight, where one DOF moves at twice the frequency of the other). Only
+    explains most of what f leaves unexplained (:data:`SUBMULTIPLE_SHARE`), the DOFs share a
+    longer period (e.g. a figure eight, where one DOF moves at twice the frequency of the
+    other). A tempo that wanders by several per cent leaves a fifth of the variance around f
+    unexplained, of which the extra harmonics of f/3 fit a little (14 s of circles at 0.67 Hz
+    came out at 0.22 Hz when any 2 % more won). Only
     sub-multiples the recording holds at least :data:`SUBMULTIPLE_MIN_PERIODS` periods of are
     tried: over a period and a half, the extra harmonics of f/3 fit a person's drift and
     wander well enough to pass (8 s of line strokes at 0.6 Hz came out at 0.199 Hz).
@@ -198,7 +204,7 @@ def fundamental_frequency_hz(t: np.ndarray, Y: np.ndarray, min_hz: float, max_hz
         candidate_hz = refine_frequency_hz(ts, Ys, best_hz / divisor, resolution / divisor,
                                            n_harmonics)
         candidate = harmonic_fit(ts, Ys, candidate_hz, n_harmonics).explained
-        if candidate > best + 0.02:
+        if candidate - best > SUBMULTIPLE_SHARE * (1.0 - best):
             best_hz, best = candidate_hz, candidate
     return harmonic_fit(t, Y, best_hz)
 
