@@ -651,9 +651,9 @@ class RegionTracker:
         if frames is not None:
             self._table_points.append(self.table_stereo.table_points(*frames,
                                                                      self._table_centre))
-        table = self.table_stereo.plane_of_points(np.concatenate(self._table_points),
-                                                  self._table_centre, self.params.table_radius,
-                                                  prior_normal=self.world_up)
+        table = self.table_stereo.plane_of_pairs(self._table_points, self._table_centre,
+                                                 self.params.table_radius,
+                                                 prior_normal=self.world_up)
         if table is not None:
             self.table = table
             self._refresh_plane(force=True)
@@ -671,9 +671,8 @@ class RegionTracker:
     def _table_fit(self, frames, earlier: list[np.ndarray], centre: np.ndarray
                    ) -> tuple[np.ndarray, Plane | None]:
         points = self.table_stereo.table_points(*frames, centre)
-        return points, self.table_stereo.plane_of_points(
-            np.concatenate(earlier + [points]), centre, self.params.table_radius,
-            prior_normal=self.world_up)
+        return points, self.table_stereo.plane_of_pairs(
+            earlier + [points], centre, self.params.table_radius, prior_normal=self.world_up)
 
     def _take_up_tables(self, every: bool = False) -> None:
         """The table measurements that are due (``every``: all of them)."""
