@@ -254,6 +254,7 @@ class RegionTracker:
         self.ray_offsets: deque[np.ndarray] = deque(maxlen=90)
         self.ray_changes: deque[float] = deque(maxlen=120)  # of accepted frames, / size
         self._ray_change: float | None = None
+        self._disagreement_of: tuple[int, str] = (-1, "")  # (frame, reason) last computed
         self.areas = [deque(maxlen=120), deque(maxlen=120)]  # metric areas of valid frames
         self.history: deque[tuple[int, np.ndarray]] = deque(maxlen=3)
         self.failures = 0
@@ -285,6 +286,7 @@ class RegionTracker:
         second pass over the same video from its start)."""
         self._take_up_tables(every=True)
         self.frame = -1
+        self._disagreement_of = (-1, "")
         self.history.clear()
         self.failures = self.params.coast_frames + 1
         self.candidates.tracks.clear()
@@ -752,9 +754,14 @@ class RegionTracker:
             else None))
 
     def _disagreement(self, rays: np.ndarray) -> str:
-        """Why the two cameras' regions cannot show the same sponge ("" if they can): where
-        their rays meet the plane must differ as usual (a hand hiding part of the sponge in
-        one camera shifts its centroid)."""
+        """Why the two cameras' regions of this frame (``rays``) cannot show the same sponge
+        ("" if they can): where their rays meet the plane must differ as usual (a hand hiding
+        part of the sponge in one camera shifts its centroid). Computed once per frame."""
+        if self._disagreement_of[0] != self.frame:
+            self._disagreement_of = (self.frame, self._ray_disagreement(rays))
+        return self._disagreement_of[1]
+
+    def _ray_disagreement(self, rays: np.ndarray) -> str:
         plane = self.sponge_plane()
         if plane is None or len(self.ray_offsets) < 5:
             return ""
