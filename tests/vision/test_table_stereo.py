@@ -61,3 +61,26 @@ def test_with_the_worlds_up_axis_a_wall_larger_than_the_table_is_not_the_table()
     assert abs(ransac_plane(points, 0.004, np.random.default_rng(1))[:800].mean()) < 0.5
     level = ransac_plane(points, 0.004, np.random.default_rng(1), towards=up)
     assert level[:800].all() and level[800:].mean() < 0.01  # (where the wall meets it)
+
+
+def test_a_pool_of_pairs_gives_the_plane_of_their_points_concatenated(scene):
+    # a pool grows by a frame pair at a time and each pair's points near the centre are
+    # kept: the plane must be the very one of all the points at once (thinned evenly over
+    # the pool, more points than a plane is fitted to)
+    calibration, _, _, _, _ = scene
+    rng = np.random.default_rng(3)
+    pairs = []
+    for count in (30000, 0, 24000, 12000):
+        xy = rng.uniform(-0.6, 0.6, (count, 2))
+        pairs.append(np.column_stack([xy, 1.0 + 0.1 * xy[:, 0] + rng.normal(0, 0.002, count)]))
+    near, up = np.array([0.0, 0.0, 1.0]), np.array([0.1, 0.0, -1.0]) / np.hypot(0.1, 1.0)
+    stereo = TableStereo(calibration)
+    for k in range(1, len(pairs) + 1):
+        pooled = stereo.plane_of_pairs(pairs[:k], near, 0.5, prior_normal=up)
+        alone = TableStereo(calibration).plane_of_points(np.concatenate(pairs[:k]), near, 0.5,
+                                                         prior_normal=up)
+        assert (pooled.normal.tobytes(), pooled.offset, pooled.count) == \
+            (alone.normal.tobytes(), alone.offset, alone.count)
+    # the same arrays about another centre are filtered afresh
+    moved = stereo.plane_of_pairs(pairs, near + [0.5, 0.0, 0.05], 0.2, prior_normal=up)
+    assert moved.count < pooled.count

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from wipelab.blas_threads import start_with_one_blas_thread
 from wipelab.cli.options import (OUTPUT_DIR, PATH, SYNTH_DURATION_S, SYNTH_FREQUENCY_HZ,
                                   comma_separated)
 
@@ -76,6 +77,7 @@ def track(demo_dir: Path, out_dir: Path, colour: str | None, hsv: str | None, ro
     FileStorage stereo calibration) and optionally demo.toml. Refuses (exit code 2) bad
     input, writing nothing.
     """
+    start_with_one_blas_thread()  # its products are small: threads would only spin
     from wipelab.stages.track import TrackParams, track as track_stage
 
     params = TrackParams(colour=colour, hsv=hsv, roi=comma_separated("--roi", roi, 4, int),

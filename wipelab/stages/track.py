@@ -43,6 +43,7 @@ from wipelab.input_files import read_input_toml
 from wipelab.logs import TIMELINE, StageRecorder, stage_panels, whole_run
 from wipelab.logs.palette import XYZ_COLOURS
 from wipelab.logs.timebase import seconds_array_to_ns
+from wipelab.long_lived import long_lived_objects
 from wipelab.manifest import build_manifest, write_json
 from wipelab.stage_output import staged_output
 from wipelab.trajectory_csv import write_trajectory
@@ -237,7 +238,8 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
     tracker_params = TrackerParams(particles=params.particles, seed=params.seed,
                                    sponge=sponge_box(params, demo.metadata, toml_name),
                                    fps=demo.reader.fps)
-    tracker = SpongeTracker(demo.calibration, colour, tracker_params)
+    with long_lived_objects():  # the libraries and the tracker: kept to the end
+        tracker = SpongeTracker(demo.calibration, colour, tracker_params)
     with tempfile.TemporaryDirectory(prefix="wipelab-track-") as workdir:
         videos = LogVideos(demo, Path(workdir))
         try:

@@ -256,6 +256,7 @@ class RegionTracker:
         self.ray_offsets: deque[np.ndarray] = deque(maxlen=90)
         self.ray_changes: deque[float] = deque(maxlen=120)  # of accepted frames, / size
         self._ray_change: float | None = None
+        self._disagreement_of: tuple[int, str] = (-1, "")  # (frame, reason) last computed
         self.areas = [deque(maxlen=120), deque(maxlen=120)]  # metric areas of valid frames
         self.history: deque[tuple[int, np.ndarray]] = deque(maxlen=3)
         self.failures = 0
@@ -287,6 +288,7 @@ class RegionTracker:
         second pass over the same video from its start)."""
         self._take_up_tables(every=True)
         self.frame = -1
+        self._disagreement_of = (-1, "")
         self.history.clear()
         self.failures = self.params.coast_frames + 1
         self.candidates.tracks.clear()
@@ -661,9 +663,9 @@ class RegionTracker:
         if frames is not None:
             self._table_points.append(self.table_stereo.table_points(*frames,
                                                                      self._table_centre))
-        table = self.table_stereo.plane_of_points(np.concatenate(self._table_points),
-                                                  self._table_centre, self.params.table_radius,
-                                                  prior_normal=self.world_up)
+        table = self.table_stereo.plane_of_pairs(self._table_points, self._table_centre,
+                                                 self.params.table_radius,
+                                                 prior_normal=self.world_up)
         if table is not None:
             self.table = table
             self._refresh_plane(force=True)
@@ -681,9 +683,8 @@ class RegionTracker:
     def _table_fit(self, frames, earlier: list[np.ndarray], centre: np.ndarray
                    ) -> tuple[np.ndarray, Plane | None]:
         points = self.table_stereo.table_points(*frames, centre)
-        return points, self.table_stereo.plane_of_points(
-            np.concatenate(earlier + [points]), centre, self.params.table_radius,
-            prior_normal=self.world_up)
+        return points, self.table_stereo.plane_of_pairs(
+            earlier + [points], centre, self.params.table_radius, prior_normal=self.world_up)
 
     def _take_up_tables(self, every: bool = False) -> None:
         """The table measurements that are due (``every``: all of them)."""
@@ -763,9 +764,14 @@ class RegionTracker:
             else None))
 
     def _disagreement(self, rays: np.ndarray) -> str:
-        """Why the two cameras' regions cannot show the same sponge ("" if they can): where
-        their rays meet the plane must differ as usual (a hand hiding part of the sponge in
-        one camera shifts its centroid)."""
+        """Why the two cameras' regions of this frame (``rays``) cannot show the same sponge
+        ("" if they can): where their rays meet the plane must differ as usual (a hand hiding
+        part of the sponge in one camera shifts its centroid). Computed once per frame."""
+        if self._disagreement_of[0] != self.frame:
+            self._disagreement_of = (self.frame, self._ray_disagreement(rays))
+        return self._disagreement_of[1]
+
+    def _ray_disagreement(self, rays: np.ndarray) -> str:
         plane = self.sponge_plane()
         if plane is None or len(self.ray_offsets) < 5:
             return ""

@@ -49,6 +49,10 @@ class TableStereo:
         self.swap = P2[axis, 3] > 0
         self.focal = float(P1[0, 0])
         self.baseline = abs(float(P2[axis, 3])) / self.focal
+        # per frame pair's points (by identity): the pair, the centre and radius, its points
+        # within that radius (a pool grows by a pair at a time; the others are not filtered
+        # again)
+        self._near: dict[int, tuple[np.ndarray, tuple[bytes, float], np.ndarray]] = {}
 
     def _maps(self, scale: float) -> list[tuple[np.ndarray, np.ndarray]]:
         c = self.calibration
@@ -117,20 +121,58 @@ class TableStereo:
                         prior_normal: np.ndarray | None = None, seed: int = 0
                         ) -> Plane | None:
         """The dominant plane of ``points`` (n, 3) within ``radius`` of ``near`` (see
-        :meth:`plane_near`), pulled towards ``prior_normal`` (the world's up axis, when
-        known) by :func:`~wipelab.vision.table_plane.fit_plane`'s prior; with a prior, only
-        planes within :data:`MAX_TILT` of it count (a camera low over the table sees more of
-        the wall or the person behind it than of the table)."""
-        points = points[np.linalg.norm(points - near, axis=1) < radius]
-        if len(points) < MIN_POINTS:
+        :meth:`plane_near` and :meth:`plane_of_pairs`)."""
+        return self.plane_of_pairs([points], near, radius, prior_normal, seed, remember=False)
+
+    def plane_of_pairs(self, pairs: list[np.ndarray], near: np.ndarray, radius: float,
+                       prior_normal: np.ndarray | None = None, seed: int = 0,
+                       remember: bool = True) -> Plane | None:
+        """The dominant plane of the points of several frame pairs (a list of arrays (n_i, 3),
+        pooled in their order) within ``radius`` of ``near`` (3,), pulled towards
+        ``prior_normal`` (the world's up axis, when known) by
+        :func:`~wipelab.vision.table_plane.fit_plane`'s prior; with a prior, only planes
+        within :data:`MAX_TILT` of it count (a camera low over the table sees more of the
+        wall or the person behind it than of the table).
+
+        The same plane as of the pairs' points concatenated; with ``remember``, each array's
+        points near ``near`` are kept (by the array's identity) for the next call with the
+        same centre and radius, so that a pool that grows by a pair filters only that pair.
+        """
+        kept = [self._points_near(points, near, radius, remember) for points in pairs]
+        count = sum(len(points) for points in kept)
+        if count < MIN_POINTS:
             return None
-        if len(points) > MAX_POINTS:  # evenly thinned: as good a plane, a fraction of the time
-            points = points[np.linspace(0, len(points) - 1, MAX_POINTS).astype(int)]
+        if count > MAX_POINTS:  # evenly thinned: as good a plane, a fraction of the time
+            points = _rows(kept, np.linspace(0, count - 1, MAX_POINTS).astype(int))
+        else:
+            points = np.concatenate(kept)
         inliers = ransac_plane(points, tolerance=0.004 * float(np.linalg.norm(near)),
                                rng=np.random.default_rng(seed), towards=prior_normal)
         if inliers.sum() < MIN_POINTS:
             return None
         return fit_plane(points[inliers], towards=np.zeros(3), prior_normal=prior_normal)
+
+    def _points_near(self, points: np.ndarray, near: np.ndarray, radius: float,
+                     remember: bool) -> np.ndarray:
+        """The rows of ``points`` (n, 3) within ``radius`` of ``near`` (3,)."""
+        key = (np.asarray(near, dtype=np.float64).tobytes(), float(radius))
+        known = self._near.get(id(points))
+        if known is not None and known[0] is points and known[1] == key:
+            return known[2]
+        kept = points[np.linalg.norm(points - near, axis=1) < radius]
+        if remember:
+            self._near[id(points)] = (points, key, kept)
+        return kept
+
+
+def _rows(arrays: list[np.ndarray], index: np.ndarray) -> np.ndarray:
+    """Rows ``index`` (ascending) of the concatenation of ``arrays``, without concatenating
+    them."""
+    ends = np.cumsum([len(a) for a in arrays])
+    which = np.searchsorted(ends, index, side="right")
+    starts = ends - [len(a) for a in arrays]
+    return np.concatenate([a[index[which == i] - start]
+                           for i, (a, start) in enumerate(zip(arrays, starts))])
 
 
 def ransac_plane(points: np.ndarray, tolerance: float, rng: np.random.Generator,
