@@ -1,6 +1,8 @@
+import cv2
 import numpy as np
 import pytest
 
+import wipelab.vision.video_io as video_io
 from wipelab.errors import InputError
 from wipelab.vision.video_io import H264Writer, StereoVideoReader, probe_video
 
@@ -45,3 +47,37 @@ def test_unreadable_missing_and_truncated_files(tmp_path):
     (tmp_path / "cut.mp4").write_bytes(data[: len(data) // 2])
     with pytest.raises(InputError, match="cut.mp4"):
         probe_video(tmp_path / "cut.mp4")
+
+
+def test_a_decoder_that_fails_midway_is_one_clear_error_not_a_hang(tmp_path, monkeypatch):
+    """FFmpeg raising inside a decoding thread (injected after 5 real frames of the right
+    file) reaches the reader as an InputError naming the file and frame; before, the reader
+    waited for that thread's next frame forever."""
+    _video(tmp_path / "l.mp4", 12)
+    _video(tmp_path / "r.mp4", 12)
+    reader = StereoVideoReader(tmp_path / "l.mp4", tmp_path / "r.mp4")
+
+    class FailingCapture:
+        def __init__(self, path, *args):
+            self.capture = cv2.VideoCapture(path, *args)
+            self.frames, self.fails = 0, "r.mp4" in path
+
+        def read(self):
+            self.frames += 1
+            if self.fails and self.frames > 5:
+                raise cv2.error("injected decoder failure")
+            return self.capture.read()
+
+        def release(self):
+            self.capture.release()
+
+    class Cv2WithFailingCapture:
+        VideoCapture = FailingCapture
+
+        def __getattr__(self, name):
+            return getattr(cv2, name)
+
+    monkeypatch.setattr(video_io, "cv2", Cv2WithFailingCapture())
+    with pytest.raises(InputError, match=r"r\.mp4: cannot be decoded at frame 5 of 12: .*injected"):
+        for _ in reader:
+            pass

@@ -63,6 +63,7 @@ def probe_video(path: str | os.PathLike) -> VideoInfo:
 def _decode(path: str, out: queue.Queue, stop: threading.Event) -> None:
     # one FFmpeg thread per file: the two files already decode in parallel, and FFmpeg's
     # own frame threads would only add synchronisation (about a quarter more CPU time)
+    # a decoder that fails hands its error over: the reader must not wait for it forever
     capture = cv2.VideoCapture(path, cv2.CAP_FFMPEG, [cv2.CAP_PROP_N_THREADS, 1])
     try:
         while not stop.is_set():
@@ -70,6 +71,8 @@ def _decode(path: str, out: queue.Queue, stop: threading.Event) -> None:
             out.put(frame if ok else None)
             if not ok:
                 return
+    except Exception as error:  # noqa: BLE001 - any failure ends this file's frames
+        out.put(error)
     finally:
         capture.release()
 
@@ -129,6 +132,9 @@ class StereoVideoReader:
                     if frame is None:
                         raise InputError(f"{info.path}: truncated, decoding stopped at frame "
                                          f"{index} of {info.frame_count}")
+                    if isinstance(frame, Exception):
+                        raise InputError(f"{info.path}: cannot be decoded at frame {index} of "
+                                         f"{info.frame_count}: {frame}") from frame
                     frame.flags.writeable = False
                 yield frames[0], frames[1]
         finally:
