@@ -346,17 +346,20 @@ class RegionTracker:
         self.prior = ColourModel.fit([frames[0]], [roi])
         return True
 
-    def _search_candidates(self, frames, model: ColourModel, images=None
+    def _search_candidates(self, frames, model: ColourModel, images=None, probabilities=None
                            ) -> list[StereoCandidate]:
         """Stereo candidates of the sponge's colour anywhere in both images, found in the
         backgrounds' low-resolution undistorted canvases (``images``, or resampled from
-        ``frames``), without the still things of its colour the backgrounds know."""
+        ``frames``; ``probabilities``: their back-projections, when already made), without
+        the still things of its colour the backgrounds know."""
         if images is None:
             images = [background.canvas_image(frame)
                       for background, frame in zip(self.backgrounds, frames)]
+        if probabilities is None:
+            probabilities = [model.back_project(image) for image in images]
         blobs, rays = [], []
-        for view, background, image in zip(self.views, self.backgrounds, images):
-            probability = model.back_project(image)
+        for view, background, image, probability in zip(self.views, self.backgrounds, images,
+                                                         probabilities):
             still = background.still_in_canvas_image(image)
             if still is not None:
                 probability[still] = 0.0
@@ -373,15 +376,16 @@ class RegionTracker:
     def _follow_candidates(self, frames, model: ColourModel) -> CandidateTrack | None:
         images = [background.canvas_image(frame)
                   for background, frame in zip(self.backgrounds, frames)]
-        for image, recent in zip(images, self._recent):
-            recent.append((self.frame, image, model.back_project(image) > 0.5))
+        probabilities = [model.back_project(image) for image in images]
+        for image, probability, recent in zip(images, probabilities, self._recent):
+            recent.append((self.frame, image, probability > 0.5))
         if len(self._recent[0]) >= self.params.acquisition.window // 2 and \
                 self.frame % BACKGROUND_REFRESH_FRAMES == 0:
             # one camera at a time, from a dozen of the recent frames: a few milliseconds,
             # not a stall of a live session
             camera = (self.frame // BACKGROUND_REFRESH_FRAMES) % 2
             self._learn_backgrounds(cameras=(camera,), frames=BACKGROUND_FRAMES)
-        candidates = self._search_candidates(frames, model, images)
+        candidates = self._search_candidates(frames, model, images, probabilities)
         self.frames_with_candidates += bool(candidates)
         self.candidates.update(self.frame, candidates)
         return self.candidates.moving(self.frame)
