@@ -117,19 +117,9 @@ def held_out_demo(workdir: Path, index: int, duration: float) -> Demo:
     if not (path / "scene.json").is_file():
         render_scene(path, seed, duration=duration, pattern=pattern, frequency_hz=frequency)
     scene = json.loads((path / "scene.json").read_text())
-    T_world_left = np.array(scene["cameras"]["T_world_left"])
-    demo = _load(path, f"{seed} {pattern} {frequency:g}Hz", scene["sponge"]["colour"],
-                 T_world_left, scene.get("summary", {}))
-    # tracks are reported in the world frame when the calibration has its pose, else in the
-    # left camera's
-    in_world = open_demo(path).calibration.T_world_left is not None
-    T_world_track = np.eye(4) if in_world else T_world_left
-    middle = transform_points(T_world_track, np.nanmean(demo.truth, axis=0))
-    away = middle - np.array([scene["person"]["x"], scene["person"]["y"], middle[2]])
-    R_track_world = T_world_track[:3, :3].T
-    demo.away = R_track_world @ (away / np.linalg.norm(away))
-    demo.up = R_track_world @ np.array([0.0, 0.0, 1.0])
-    return demo
+    return _load(path, f"{seed} {pattern} {frequency:g}Hz", scene["sponge"]["colour"],
+                 np.array(scene["cameras"]["T_world_left"]), scene.get("summary", {}),
+                 person_xy=(scene["person"]["x"], scene["person"]["y"]))
 
 
 def synth_demo(workdir: Path, pattern: str, frequency_hz: float, seed: int,
@@ -143,14 +133,26 @@ def synth_demo(workdir: Path, pattern: str, frequency_hz: float, seed: int,
                  {"pattern": pattern, "frequency_hz": frequency_hz})
 
 
-def _load(path: Path, name: str, colour: str, T_world_left, factors: dict) -> Demo:
+def _load(path: Path, name: str, colour: str, T_world_left, factors: dict,
+          person_xy: tuple[float, float] | None = None) -> Demo:
     demo = open_demo(path)
     truth = read_trajectory(path / "truth.csv", required=("t", "x", "y", "z"))
-    points = truth.array(["x", "y", "z"])
-    if demo.calibration.T_world_left is None:  # the track is in the left camera's frame
-        points = transform_points(invert_transform(T_world_left), points)
+    points = truth.array(["x", "y", "z"])  # world frame
+    # tracks are reported in the world frame when the calibration has its pose, else in the
+    # left camera's
+    in_world = demo.calibration.T_world_left is not None
+    T_world_track = np.eye(4) if in_world else np.asarray(T_world_left, dtype=np.float64)
+    R_track_world = T_world_track[:3, :3].T
+    away = up = None
+    if person_xy is not None:
+        middle = np.nanmean(points, axis=0)
+        away = middle - np.array([person_xy[0], person_xy[1], middle[2]])
+        away = R_track_world @ (away / np.linalg.norm(away))
+        up = R_track_world @ np.array([0.0, 0.0, 1.0])
+    if not in_world:
+        points = transform_points(invert_transform(T_world_track), points)
     visible = np.column_stack([truth.columns["visible_left"], truth.columns["visible_right"]])
-    return Demo(name, path, colour, points, visible, demo.reader.fps, factors)
+    return Demo(name, path, colour, points, visible, demo.reader.fps, factors, away, up)
 
 
 def score(demo: Demo, points: np.ndarray, valid: np.ndarray) -> Score:

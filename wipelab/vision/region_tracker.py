@@ -485,9 +485,9 @@ class RegionTracker:
         point = track.last_point
         if not self._table_points:
             self._table_points.append(self.table_stereo.table_points(*frames, point))
-        table = self.table_stereo.plane_of_points(np.concatenate(self._table_points), point,
-                                                  self.params.table_radius,
-                                                  prior_normal=self.world_up)
+        table = self.table_stereo.plane_of_pairs(self._table_points, point,
+                                                 self.params.table_radius,
+                                                 prior_normal=self.world_up, remember=False)
         if table is None:
             return False
         height = float(np.median(table.distance(np.array(list(track.points)[-15:]))))
