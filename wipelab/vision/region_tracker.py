@@ -557,7 +557,7 @@ class RegionTracker:
         are (per camera: (mask, origin, step))."""
         for background, frame, region in zip(self.backgrounds, frames, keep_out):
             if region is not None:
-                background.update(frame, self.model, [region])
+                background.update(frame, (self.model, self.prior), [region])
 
     def _region(self, view: _View, frame: np.ndarray, point: np.ndarray, slack: float,
                 background: StaticBackground | None = None):

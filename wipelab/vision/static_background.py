@@ -2,10 +2,18 @@
 sponge from still things of its colour that it touches or passes over.
 
 A cloth, a stain or a plate of the sponge's colour merges with the sponge's colour region
-whenever the sponge comes near. The background learns, only from what it sees *outside* the
-tracked sponge's region, where the scene shows the sponge's colour on its own; a pixel there
-that still looks as it did (no sponge over it) is not the sponge. Pixels the sponge has
-covered all along have no background yet and never count as still things.
+whenever the sponge comes near. The background holds, per pixel, the *median* appearance of
+the scene (started from the median of recent frames, then followed by an approximate median:
+each update moves it a few grey levels towards what the pixel shows, McFarlane & Schofield
+1995). The sponge and the holding arm pass over a pixel of the wiped area less than half of
+the time, so the median there is what lies on the table; where that median is of the
+sponge's colour, a still thing of its colour lies, and a pixel that still looks like it is
+not the sponge. The background learns only outside the tracked sponge's region.
+
+A sponge that rests, or wipes a path smaller than itself, keeps pixels covered more than
+half of the time and turns into a still thing of its own (a ghost): a still thing that lies
+under the sponge's region (nine tenths of it), or holds the middle of its path, is
+remembered as a ghost until the median there is no longer of the sponge's colour.
 
 The background is kept at low resolution in the undistorted canvas of
 :class:`~wipelab.vision.undistortion.Undistorter`, so that a measurement window reads it
@@ -22,7 +30,7 @@ from wipelab.vision.undistortion import Undistorter
 
 
 class StaticBackground:
-    """A running-mean background of one camera, in its undistorted canvas.
+    """The median appearance of one camera's scene, in its undistorted canvas.
 
     Parameters
     ----------
@@ -30,17 +38,17 @@ class StaticBackground:
         The camera's undistortion (its canvas is the background's frame).
     scale : float
         Resolution of the background relative to the canvas.
-    rate : float
-        Weight of a new observation of a pixel in the running mean.
+    step : float
+        Grey levels by which an update moves each learnt pixel towards what it shows.
     difference : float
         A pixel differs from the background when one of its channels differs by more than
         this (grey levels).
     """
 
-    def __init__(self, undistorter: Undistorter, scale: float, rate: float = 0.2,
+    def __init__(self, undistorter: Undistorter, scale: float, step: float = 4.0,
                  difference: float = 24.0):
         self.scale = scale
-        self.rate = rate
+        self.step = step
         self.difference = difference
         width, height = undistorter.size
         self.size = (max(8, int(round(width * scale))), max(8, int(round(height * scale))))
@@ -58,11 +66,10 @@ class StaticBackground:
         # background pixels that see the frame at all (a wide-angle canvas has empty corners)
         frame_width, frame_height = undistorter.frame_size
         self.in_frame = ((self.map_u >= 0) & (self.map_v >= 0) & (self.map_u <= frame_width - 1)
-                         & (self.map_v <= frame_height - 1)).astype(np.float32)
-        # running sums weighted like an exponential mean; divided by ``seen`` when read
-        self.image = np.zeros(shape + (3,), np.float32)
-        self.colour = np.zeros(shape, np.float32)
-        self.seen = np.zeros(shape, np.float32)
+                         & (self.map_v <= frame_height - 1))
+        self.image = np.zeros(shape + (3,), np.float32)  # median appearance, BGR
+        self.coloured = np.zeros(shape, bool)  # the median is of the sponge's colour
+        self.ghosts = np.zeros(shape, bool)    # ... but it is the sponge itself
         self.still = np.zeros(shape, np.uint8)
         self._mean: np.ndarray | None = None
         self.updates = 0
@@ -72,23 +79,19 @@ class StaticBackground:
         return cv2.remap(frame, self.map_u, self.map_v, cv2.INTER_LINEAR,
                          borderMode=cv2.BORDER_CONSTANT)
 
-    def initialise(self, images: np.ndarray, positive: np.ndarray,
-                   persistence: float = 0.85) -> None:
+    def initialise(self, images: np.ndarray, positive: np.ndarray) -> None:
         """Start from a stack of recent frames (:meth:`canvas_image`, (m, h, w, 3)) and
         where each showed the sponge's colour ((m, h, w) bool), taken before the sponge
-        was known: the background is their per-pixel median, and the still things of the
-        sponge's colour are where that colour showed in at least ``persistence`` of them
-        (the moving sponge passes; a cloth stays)."""
-        median = np.median(images, axis=0).astype(np.float32)
-        seen = self.in_frame.copy()
-        self.image = median * seen[..., None]
-        self.colour = (positive.mean(axis=0) >= persistence).astype(np.float32) * seen
-        self.seen = seen
+        was known: the background is their per-pixel median, of the sponge's colour where
+        that colour showed in at least half of them (a moving sponge and the arm holding it
+        pass; a cloth stays)."""
+        self.image = np.median(images, axis=0).astype(np.float32)
+        self.coloured = (2 * positive.sum(axis=0) >= len(positive)) & self.in_frame
+        self.ghosts &= self.coloured
         self.updates += 1
-        self.still = ((self.seen > 0.3) & (self.colour > 0.5 * self.seen)).astype(np.uint8)
-        self._mean = None
+        self._classify()
 
-    def update(self, frame: np.ndarray, model: ColourModel,
+    def update(self, frame: np.ndarray, models: tuple[ColourModel, ...],
                keep_out: list[tuple[np.ndarray, np.ndarray, int]]) -> None:
         """Learn from a frame everywhere but where the sponge is.
 
@@ -96,50 +99,57 @@ class StaticBackground:
         ----------
         frame : ndarray
             The camera's frame, BGR uint8, full resolution.
-        model : ColourModel
-            The sponge's colour.
+        models : tuple of ColourModel
+            The sponge's colour: a pixel is of it when one of these models says so (the
+            colour learnt from the sponge, and the colour the user named: a cloth of the
+            named colour is a still thing of it even where its shade differs from the
+            sponge's).
         keep_out : list of (mask, origin (2,), step)
             Where the sponge is: bool masks of canvas windows (pixel (i, j) at canvas
             ``origin + step (j, i)``), grown by a pixel of the background.
         """
         small = self.canvas_image(frame)
-        weight = self.rate * self.in_frame
-        under = np.zeros(weight.shape, np.uint8)
+        under = np.zeros(self.in_frame.shape, np.uint8)
         for mask, origin, step in keep_out:
             x0, y0, x1, y1 = self._bounds(origin, mask.shape, step)
             if x1 > x0 and y1 > y0:
                 inside = cv2.resize(mask.astype(np.uint8), (x1 - x0, y1 - y0),
                                     interpolation=cv2.INTER_AREA)
                 under[y0:y1, x0:x1] |= cv2.dilate(inside, np.ones((3, 3), np.uint8))
-        weight[under > 0] = 0.0
-        colour = (model.back_project(small) > 0.5).astype(np.float32)
-        self.image += weight[..., None] * (small.astype(np.float32) - self.image)
-        self.colour += weight * (colour - self.colour)
-        self.seen += weight * (1.0 - self.seen)
-        self.updates += 1
-        self.still = ((self.seen > 0.3) & (self.colour > 0.5 * self.seen)).astype(np.uint8)
-        self._forget_ghosts(under)
+        learn = self.in_frame.astype(np.float32)
+        towards = np.sign(small.astype(np.float32) - self.image)
+        self.image += (self.step * learn)[..., None] * towards
         self._mean = None
+        coloured = np.zeros(self.in_frame.shape, bool)
+        for model in models:
+            coloured |= model.back_project(self.mean) > 0.5
+        self.coloured = coloured & self.in_frame
+        self.ghosts &= self.coloured
+        self.updates += 1
+        self._classify()
+        self._forget_ghosts(under)
+
+    def _classify(self) -> None:
+        self.still = (self.coloured & ~self.ghosts).astype(np.uint8)
 
     def _forget_ghosts(self, under: np.ndarray) -> None:
         """A still thing that lies (nine tenths of it) under the sponge now is the sponge
-        itself, mistaken for one while it rested or wiped a path smaller than itself: forget
-        it. A cloth or a plate the sponge is on reaches beyond it."""
+        itself, mistaken for one while it rested or wiped a path smaller than itself: a
+        ghost. A cloth or a plate the sponge is on reaches beyond it."""
         if not (self.still & under).any():
             return
         count, labels, stats, _ = cv2.connectedComponentsWithStats(self.still, connectivity=8)
         covered = np.bincount(labels[under > 0], minlength=count)
         for label in range(1, count):
             if covered[label] >= 0.9 * stats[label, cv2.CC_STAT_AREA]:
-                self.colour[labels == label] = 0.0
-        self.still = ((self.seen > 0.3) & (self.colour > 0.5 * self.seen)).astype(np.uint8)
+                self.ghosts[labels == label] = True
+        self._classify()
 
     @property
     def mean(self) -> np.ndarray:
         """The background's colours, BGR uint8 (computed when first needed after an update)."""
         if self._mean is None:
-            seen = np.maximum(self.seen, 1e-6)
-            self._mean = np.clip(self.image / seen[..., None], 0, 255).astype(np.uint8)
+            self._mean = np.clip(self.image + 0.5, 0, 255).astype(np.uint8)
         return self._mean
 
     def _bounds(self, origin, shape, step) -> tuple[int, int, int, int]:
@@ -168,8 +178,8 @@ class StaticBackground:
         label = labels[y, x]
         if label and stats[label, cv2.CC_STAT_AREA] <= max_area * self.scale ** 2 and \
                 np.linalg.norm(centroids[label] - middle) <= max_offset * self.scale:
-            self.colour[labels == label] = 0.0
-        self.still = ((self.seen > 0.3) & (self.colour > 0.5 * self.seen)).astype(np.uint8)
+            self.ghosts[labels == label] = True
+        self._classify()
 
     def still_in_canvas_image(self, image: np.ndarray) -> np.ndarray | None:
         """Where a :meth:`canvas_image` shows a still thing of the sponge's colour as it
