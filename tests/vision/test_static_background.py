@@ -41,7 +41,7 @@ def _canvas(background: StaticBackground, mask: np.ndarray) -> np.ndarray:
                                    * 255)[..., 0] > 127
 
 
-def _keep_out(background: StaticBackground, mask: np.ndarray):
+def _region_of(background: StaticBackground, mask: np.ndarray):
     return [(_canvas(background, mask), np.zeros(2), 1)]
 
 
@@ -92,7 +92,7 @@ def test_a_resting_sponge_becomes_a_ghost_and_is_forgotten_under_the_region():
     sponge = np.zeros(frame.shape[:2], bool)
     sponge[50:66, 70:86] = True
     frame[sponge] = SPONGE
-    keep_out = _keep_out(background, sponge)
+    keep_out = _region_of(background, sponge)
     sponge = _canvas(background, sponge)
     images = np.stack([background.canvas_image(frame)] * 5)
     background.initialise(images, np.stack([model.back_project(i) > 0.5 for i in images]))

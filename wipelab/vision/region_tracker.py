@@ -552,10 +552,10 @@ class RegionTracker:
     def last_valid(self) -> np.ndarray | None:
         return self.history[-1][1] if self.history else None
 
-    def _update_backgrounds(self, frames, keep_out: list) -> None:
-        """Blend the frames into the static backgrounds, except where the sponge's regions
-        are (per camera: (mask, origin, step))."""
-        for background, frame, region in zip(self.backgrounds, frames, keep_out):
+    def _update_backgrounds(self, frames, regions: list) -> None:
+        """Learn the frames into the static backgrounds, with the sponge's regions (per
+        camera: (mask, origin, step)) under which still things are ghosts."""
+        for background, frame, region in zip(self.backgrounds, frames, regions):
             if region is not None:
                 background.update(frame, (self.model, self.prior), [region])
 

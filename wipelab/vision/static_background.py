@@ -8,7 +8,8 @@ each update moves it a few grey levels towards what the pixel shows, McFarlane &
 1995). The sponge and the holding arm pass over a pixel of the wiped area less than half of
 the time, so the median there is what lies on the table; where that median is of the
 sponge's colour, a still thing of its colour lies, and a pixel that still looks like it is
-not the sponge. The background learns only outside the tracked sponge's region.
+not the sponge. The median is learnt from the whole frame, the sponge's region included: a
+region that took in part of a cloth would otherwise keep that part from ever being learnt.
 
 A sponge that rests, or wipes a path smaller than itself, keeps pixels covered more than
 half of the time and turns into a still thing of its own (a ghost): a still thing that lies
@@ -67,6 +68,7 @@ class StaticBackground:
         frame_width, frame_height = undistorter.frame_size
         self.in_frame = ((self.map_u >= 0) & (self.map_v >= 0) & (self.map_u <= frame_width - 1)
                          & (self.map_v <= frame_height - 1))
+        self._steps = (step * self.in_frame).astype(np.float32)  # per update and pixel
         self.image = np.zeros(shape + (3,), np.float32)  # median appearance, BGR
         self.coloured = np.zeros(shape, bool)  # the median is of the sponge's colour
         self.ghosts = np.zeros(shape, bool)    # ... but it is the sponge itself
@@ -92,8 +94,9 @@ class StaticBackground:
         self._classify()
 
     def update(self, frame: np.ndarray, models: tuple[ColourModel, ...],
-               keep_out: list[tuple[np.ndarray, np.ndarray, int]]) -> None:
-        """Learn from a frame everywhere but where the sponge is.
+               regions: list[tuple[np.ndarray, np.ndarray, int]]) -> None:
+        """Learn from a frame: move the median towards it, then forget the still things
+        that lie under the sponge's region (ghosts).
 
         Parameters
         ----------
@@ -104,21 +107,20 @@ class StaticBackground:
             colour learnt from the sponge, and the colour the user named: a cloth of the
             named colour is a still thing of it even where its shade differs from the
             sponge's).
-        keep_out : list of (mask, origin (2,), step)
-            Where the sponge is: bool masks of canvas windows (pixel (i, j) at canvas
-            ``origin + step (j, i)``), grown by a pixel of the background.
+        regions : list of (mask, origin (2,), step)
+            Where the sponge's region is: bool masks of canvas windows (pixel (i, j) at
+            canvas ``origin + step (j, i)``), grown by a pixel of the background.
         """
         small = self.canvas_image(frame)
         under = np.zeros(self.in_frame.shape, np.uint8)
-        for mask, origin, step in keep_out:
+        for mask, origin, step in regions:
             x0, y0, x1, y1 = self._bounds(origin, mask.shape, step)
             if x1 > x0 and y1 > y0:
                 inside = cv2.resize(mask.astype(np.uint8), (x1 - x0, y1 - y0),
                                     interpolation=cv2.INTER_AREA)
                 under[y0:y1, x0:x1] |= cv2.dilate(inside, np.ones((3, 3), np.uint8))
-        learn = self.in_frame.astype(np.float32)
         towards = np.sign(small.astype(np.float32) - self.image)
-        self.image += (self.step * learn)[..., None] * towards
+        self.image += self._steps[..., None] * towards
         self._mean = None
         coloured = np.zeros(self.in_frame.shape, bool)
         for model in models:
