@@ -105,3 +105,20 @@ def test_a_resting_sponge_becomes_a_ghost_and_is_forgotten_under_the_region():
     for _ in range(40):
         background.update(table, (model,), [])
     assert not background.ghosts.any() and background.still.sum() == 0
+
+
+def test_where_the_sponge_has_been_a_still_thing_of_its_size_is_a_ghost_a_cloth_is_not():
+    background = _background()
+    model = prior_model(NAMED_COLOURS["cyan"])
+    frame = np.full((SIZE[1], SIZE[0], 3), TABLE, np.uint8)
+    frame[50:66, 20:36] = SPONGE            # where the sponge rested before it wiped
+    frame[30:110, 80:150] = CLOTH           # a cloth it wiped across
+    images = np.stack([background.canvas_image(frame)] * 5)
+    background.initialise(images, np.stack([model.back_project(i) > 0.5 for i in images]))
+    rest = _canvas(background, np.pad(np.ones((16, 16), bool), ((50, 54), (20, 124))))
+    cloth = _canvas(background, np.pad(np.ones((80, 70), bool), ((30, 10), (80, 10))))
+    assert background.still[rest].mean() > 0.9 and background.still[cloth].mean() > 0.9
+    path = np.array([[28.0, 58.0], [60.0, 60.0], [100.0, 70.0], [120.0, 60.0]]) + 1  # canvas
+    background.release_visited(path, max_area=2 * 16 ** 2)
+    assert background.still[rest].sum() == 0              # the sponge's own ghost
+    assert background.still[cloth].mean() > 0.9          # too large to be the sponge

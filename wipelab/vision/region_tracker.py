@@ -295,6 +295,19 @@ class RegionTracker:
         for recent in self._recent:
             recent.clear()
         self._last_seen = None  # the pass starts where the video starts, not where it ended
+        self._release_visited()
+
+    def _release_visited(self) -> None:
+        """Forget the still things of a sponge's size that lie where the sponge has been
+        (:meth:`StaticBackground.release_visited`): the pass starts where the sponge may
+        have rested, as still as a thing of its colour, before it wiped."""
+        if not self._valid_points or self.size is None:
+            return
+        points = np.array([point for _, point in self._valid_points])
+        for view, background in zip(self.views, self.backgrounds):
+            per_metre = view.focal / float(np.median(points[:, 2]))
+            pixels = np.array([view.pixel(point) for point in points])
+            background.release_visited(pixels, 2.0 * (self.size * per_metre) ** 2)
 
     def prepare(self) -> None:
         """Load the compiled plane fit now: numba's first call in a process takes ~0.3 s,

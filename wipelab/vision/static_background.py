@@ -183,6 +183,23 @@ class StaticBackground:
             self.ghosts[labels == label] = True
         self._classify()
 
+    def release_visited(self, canvas_points: np.ndarray, max_area: float) -> None:
+        """Forget the still things of at most ``max_area`` canvas pixels that the sponge has
+        been on (``canvas_points`` (n, 2), canvas pixels of its valid points): where it
+        rested before the demonstration, or dwelt at the ends of its strokes, it left a
+        ghost of itself, which would hide it from the search when it rests there again."""
+        count, labels, stats, _ = cv2.connectedComponentsWithStats(self.still, connectivity=8)
+        if count <= 1:
+            return
+        pixels = np.round((np.asarray(canvas_points) + 0.5) * self.scale - 0.5).astype(int)
+        inside = (pixels[:, 0] >= 0) & (pixels[:, 1] >= 0) & (pixels[:, 0] < self.size[0]) & \
+            (pixels[:, 1] < self.size[1])
+        visited = np.unique(labels[pixels[inside, 1], pixels[inside, 0]])
+        small = stats[:, cv2.CC_STAT_AREA] <= max_area * self.scale ** 2
+        for label in visited[(visited > 0) & small[visited]]:
+            self.ghosts[labels == label] = True
+        self._classify()
+
     def still_in_canvas_image(self, image: np.ndarray) -> np.ndarray | None:
         """Where a :meth:`canvas_image` shows a still thing of the sponge's colour as it
         always did: bool (h, w); None before the background knows anything."""
