@@ -11,6 +11,7 @@ from wipelab.vision.static_background import StaticBackground
 from wipelab.vision.undistortion import Undistorter
 
 SIZE = (160, 120)
+GHOST = 2 * 16 ** 2  # canvas pixels: twice the drawn sponge's area
 TABLE, CLOTH, SPONGE, ARM = (150, 160, 170), (200, 190, 60), (150, 140, 30), (120, 150, 200)
 
 
@@ -70,7 +71,7 @@ def test_a_cloth_passed_over_stays_a_still_thing_and_the_sponge_on_it_is_not_one
     for t in range(60, 400, 3):
         frame, sponge = _frame(t, rng)
         region = _tracked_region(background, frame, sponge, model)
-        background.update(frame, (model,), [(region, np.zeros(2), 1)])
+        background.update(frame, (model,), [(region, np.zeros(2), 1)], GHOST)
     cloth = np.zeros(SIZE[::-1], bool)
     cloth[42:98, 42:118] = True
     cloth = _canvas(background, cloth)
@@ -97,13 +98,13 @@ def test_a_resting_sponge_becomes_a_ghost_and_is_forgotten_under_the_region():
     images = np.stack([background.canvas_image(frame)] * 5)
     background.initialise(images, np.stack([model.back_project(i) > 0.5 for i in images]))
     assert background.still[sponge].mean() > 0.9     # resting: it looks like a still thing
-    background.update(frame, (model,), keep_out)
+    background.update(frame, (model,), keep_out, GHOST)
     assert background.still.sum() == 0               # under the region: a ghost, forgotten
     assert background.ghosts[sponge].all()
     # once it is gone, the table shows through and the ghost ends
     table = np.full_like(frame, TABLE)
     for _ in range(40):
-        background.update(table, (model,), [])
+        background.update(table, (model,), [], GHOST)
     assert not background.ghosts.any() and background.still.sum() == 0
 
 
@@ -119,6 +120,6 @@ def test_where_the_sponge_has_been_a_still_thing_of_its_size_is_a_ghost_a_cloth_
     cloth = _canvas(background, np.pad(np.ones((80, 70), bool), ((30, 10), (80, 10))))
     assert background.still[rest].mean() > 0.9 and background.still[cloth].mean() > 0.9
     path = np.array([[28.0, 58.0], [60.0, 60.0], [100.0, 70.0], [120.0, 60.0]]) + 1  # canvas
-    background.release_visited(path, max_area=2 * 16 ** 2)
+    background.release_visited(path, GHOST)
     assert background.still[rest].sum() == 0              # the sponge's own ghost
     assert background.still[cloth].mean() > 0.9          # too large to be the sponge

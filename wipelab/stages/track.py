@@ -250,10 +250,15 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
             raise InputError(f"{colour.option}: this colour never shows in both {demo.left} "
                              f"and {demo.right}; give the sponge's colour with --color, --hsv "
                              "or --roi")
-        if result is None:
+        if result is None and not tracker.identified:
             raise InputError(f"{demo.left}, {demo.right}: nothing of this colour "
                              f"({colour.option}) moves like a wiping sponge in both cameras; "
                              "give the sponge's colour with --color, --hsv or --roi")
+        if result is None:
+            raise InputError(f"{demo.left}, {demo.right}: a sponge of this colour "
+                             f"({colour.option}) was found but could be followed in fewer than "
+                             "two frames; give the sponge's colour more closely with --hsv or "
+                             "--roi")
         _write_outputs(demo, out_dir, params, colour, tracker, tracker_params, result, videos,
                        quiet)
     return result
@@ -289,7 +294,8 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
                 on_frame: Callable[[int, FrameEstimate], None] | None = None,
                 frame_sink: Callable[[np.ndarray, np.ndarray], None] | None = None
                 ) -> TrackResult | None:
-    """Run ``tracker`` over every frame pair of ``reader``; None if no frame was valid.
+    """Run ``tracker`` over every frame pair of ``reader``; None if fewer than two
+    frames were valid.
 
     Two passes: a warm-up over the first ``params.warmup`` seconds (longer until the sponge
     is found and the plane it moves in is known), then, with what it learnt, the tracking
@@ -335,7 +341,7 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
             if on_frame is not None:
                 on_frame(k, estimate)
             bar.update()
-    if not valid.any():
+    if valid.sum() < 2:  # no movement to measure the demonstration area from
         return None
     t = np.arange(n) / reader.fps
     area = measure_demonstration_area(t, poses[:, :2], valid, params.area_window)

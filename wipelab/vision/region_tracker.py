@@ -304,10 +304,15 @@ class RegionTracker:
         if not self._valid_points or self.size is None:
             return
         points = np.array([point for _, point in self._valid_points])
+        middle = np.median(points, axis=0)
         for view, background in zip(self.views, self.backgrounds):
-            per_metre = view.focal / float(np.median(points[:, 2]))
             pixels = np.array([view.pixel(point) for point in points])
-            background.release_visited(pixels, 2.0 * (self.size * per_metre) ** 2)
+            background.release_visited(pixels, self._largest_ghost(view, middle))
+
+    def _largest_ghost(self, view: _View, point: np.ndarray) -> float:
+        """Canvas pixels of camera ``view`` that a ghost of the sponge at ``point`` covers at
+        most (twice its area: it may have dwelt a little here and there)."""
+        return 2.0 * (self.size * view.focal / max(view.depth(point), 1e-3)) ** 2
 
     def prepare(self) -> None:
         """Load the compiled plane fit now: numba's first call in a process takes ~0.3 s,
@@ -567,10 +572,13 @@ class RegionTracker:
 
     def _update_backgrounds(self, frames, regions: list) -> None:
         """Learn the frames into the static backgrounds, with the sponge's regions (per
-        camera: (mask, origin, step)) under which still things are ghosts."""
-        for background, frame, region in zip(self.backgrounds, frames, regions):
+        camera: (mask, origin, step); None: that camera is not learnt) under which still
+        things are ghosts."""
+        for view, background, frame, region in zip(self.views, self.backgrounds, frames,
+                                                    regions):
             if region is not None:
-                background.update(frame, (self.model, self.prior), [region])
+                background.update(frame, (self.model, self.prior), [region],
+                                  self._largest_ghost(view, self.history[-1][1]))
 
     def _region(self, view: _View, frame: np.ndarray, point: np.ndarray, slack: float,
                 background: StaticBackground | None = None):

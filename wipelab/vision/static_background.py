@@ -94,7 +94,7 @@ class StaticBackground:
         self._classify()
 
     def update(self, frame: np.ndarray, models: tuple[ColourModel, ...],
-               regions: list[tuple[np.ndarray, np.ndarray, int]]) -> None:
+               regions: list[tuple[np.ndarray, np.ndarray, int]], max_ghost: float) -> None:
         """Learn from a frame: move the median towards it, then forget the still things
         that lie under the sponge's region (ghosts).
 
@@ -110,6 +110,9 @@ class StaticBackground:
         regions : list of (mask, origin (2,), step)
             Where the sponge's region is: bool masks of canvas windows (pixel (i, j) at
             canvas ``origin + step (j, i)``), grown by a pixel of the background.
+        max_ghost : float
+            Canvas pixels a ghost of the sponge covers at most: a larger still thing under
+            the region is a cloth that the region took in, not the sponge.
         """
         small = self.canvas_image(frame)
         under = np.zeros(self.in_frame.shape, np.uint8)
@@ -129,12 +132,12 @@ class StaticBackground:
         self.ghosts &= self.coloured
         self.updates += 1
         self._classify()
-        self._forget_ghosts(under)
+        self._forget_ghosts(under, max_ghost)
 
     def _classify(self) -> None:
         self.still = (self.coloured & ~self.ghosts).astype(np.uint8)
 
-    def _forget_ghosts(self, under: np.ndarray) -> None:
+    def _forget_ghosts(self, under: np.ndarray, max_area: float) -> None:
         """A still thing that lies (nine tenths of it) under the sponge now is the sponge
         itself, mistaken for one while it rested or wiped a path smaller than itself: a
         ghost. A cloth or a plate the sponge is on reaches beyond it."""
@@ -142,8 +145,9 @@ class StaticBackground:
             return
         count, labels, stats, _ = cv2.connectedComponentsWithStats(self.still, connectivity=8)
         covered = np.bincount(labels[under > 0], minlength=count)
+        area = stats[:, cv2.CC_STAT_AREA]
         for label in range(1, count):
-            if covered[label] >= 0.9 * stats[label, cv2.CC_STAT_AREA]:
+            if covered[label] >= 0.9 * area[label] and area[label] <= max_area * self.scale ** 2:
                 self.ghosts[labels == label] = True
         self._classify()
 
