@@ -28,7 +28,8 @@ import queue
 import sys
 import tempfile
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
@@ -240,7 +241,7 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
                                    fps=demo.reader.fps)
     with long_lived_objects():  # the libraries and the tracker: kept to the end
         tracker = SpongeTracker(demo.calibration, colour, tracker_params)
-    with tempfile.TemporaryDirectory(prefix="wipelab-track-") as workdir:
+    with tempfile.TemporaryDirectory(prefix="wipelab-track-") as workdir, opencv_on_one_thread():
         videos = LogVideos(demo, Path(workdir))
         try:
             result = run_tracker(tracker, demo.reader, params, quiet, frame_sink=videos.write)
@@ -262,6 +263,19 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
         _write_outputs(demo, out_dir, params, colour, tracker, tracker_params, result, videos,
                        quiet)
     return result
+
+
+@contextmanager
+def opencv_on_one_thread() -> Iterator[None]:
+    """OpenCV's thread pool off (each call on its caller's thread) until the block ends:
+    the decoders, the previews' encoder and the tracker keep the cores busy already, and the
+    pool's workers spin while they wait for work (CPU time for nothing)."""
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(1)
+    try:
+        yield
+    finally:
+        cv2.setNumThreads(before)
 
 
 def _write_outputs(demo: Demo, out_dir, params: TrackParams, colour: ColourSource,
@@ -504,8 +518,9 @@ def _quaternions_xyzw(R: np.ndarray) -> np.ndarray:
     return q / np.linalg.norm(q, axis=1, keepdims=True)
 
 
-#: Widest video written for the logs when the demo's own videos cannot be logged as they are.
-PREVIEW_WIDTH = 640
+#: Widest video written for the logs when the demo's own videos cannot be logged as they are
+#: (320: a quarter of 640's pixels, half its scaling and encoding time).
+PREVIEW_WIDTH = 320
 #: Frame pairs waiting for the previews' encoder at most.
 PREVIEW_QUEUE = 8
 

@@ -19,6 +19,7 @@ for points X on the plane; ``normal`` is unit length and points towards the came
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numba import njit
@@ -54,7 +55,12 @@ class Plane:
 
     def basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(origin, e1, e2): the point of the plane nearest the frame's origin and two unit
-        vectors spanning the plane (right-handed with the normal)."""
+        vectors spanning the plane (right-handed with the normal); not to be changed."""
+        return self._basis
+
+    @cached_property
+    def _basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`basis`, worked out once per plane (the tracker asks for it every frame)."""
         helper = np.eye(3)[int(np.argmin(np.abs(self.normal)))]
         e1 = np.cross(helper, self.normal)
         e1 /= np.linalg.norm(e1)

@@ -133,6 +133,7 @@ class SpongeTracker:
         self.feature: LinearColourFeature | None = None
         self.offsets: deque[np.ndarray] = deque(maxlen=30)  # box centre - region point, left
         self._median_offset: np.ndarray | None = None
+        self._table_axes: tuple[bytes, np.ndarray] | None = None  # (plane normal, axes)
         self.frame = -1
 
     @property
@@ -186,10 +187,15 @@ class SpongeTracker:
 
     def table_axes_in_track(self) -> np.ndarray:
         """Axes (3, 3) of the table in the tracking frame, as yaw is measured about them
-        (:func:`table_axes` of the plane the sponge moves in; identity before it is known)."""
+        (:func:`table_axes` of the plane the sponge moves in; identity before it is known);
+        not to be changed."""
         plane = self.region.sponge_plane()
-        return np.eye(3) if plane is None else \
-            table_axes(self.T_track_left[:3, :3] @ plane.normal)
+        if plane is None:
+            return np.eye(3)
+        normal = plane.normal.tobytes()  # refitted often, the plane keeps its normal mostly
+        if self._table_axes is None or self._table_axes[0] != normal:
+            self._table_axes = (normal, table_axes(self.T_track_left[:3, :3] @ plane.normal))
+        return self._table_axes[1]
 
     def _yaw(self, direction_left: np.ndarray) -> float:
         """Yaw (rad, half turn) of the region's long axis (3,), left frame, about the table
