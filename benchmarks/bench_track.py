@@ -37,7 +37,10 @@ the worst scenes, and the held-out biases split into away from the demonstrating
 Usage::
 
     python benchmarks/bench_track.py [--held-out 24] [--duration 30] [--synth-seeds 1]
-                                     [--workdir DIR]
+                                     [--dev-seeds 12,14,16] [--workdir DIR]
+
+``--dev-seeds`` adds development scenes (each with its own drawn pattern and tempo) for
+tuning; ``--held-out 0 --synth-seeds 0 --dev-seeds ...`` runs only them.
 """
 
 from __future__ import annotations
@@ -45,6 +48,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -119,6 +123,21 @@ def held_out_demo(workdir: Path, index: int, duration: float) -> Demo:
     scene = json.loads((path / "scene.json").read_text())
     return _load(path, f"{seed} {pattern} {frequency:g}Hz", scene["sponge"]["colour"],
                  np.array(scene["cameras"]["T_world_left"]), scene.get("summary", {}),
+                 person_xy=(scene["person"]["x"], scene["person"]["y"]))
+
+
+def dev_demo(workdir: Path, seed: int, duration: float) -> Demo:
+    """Render (once) development scene ``seed`` (< 10000: its own pattern and tempo) and load
+    its truth: for tuning, on scenes anyone may look at."""
+    if seed >= HELD_OUT_SEEDS_FROM:
+        raise SystemExit(f"--dev-seeds: {seed} is a held-out seed (>= {HELD_OUT_SEEDS_FROM})")
+    path = workdir / f"dev_{seed}_{duration:g}s"
+    if not (path / "scene.json").is_file():
+        render_scene(path, seed, duration=duration)
+    scene = json.loads((path / "scene.json").read_text())
+    summary = scene.get("summary", {})
+    return _load(path, f"dev {seed} {summary.get('pattern')}", scene["sponge"]["colour"],
+                 np.array(scene["cameras"]["T_world_left"]), summary,
                  person_xy=(scene["person"]["x"], scene["person"]["y"]))
 
 
@@ -198,6 +217,7 @@ def regain_time(demo: Demo, valid: np.ndarray) -> float:
 
 def run_command(demo: Demo, out: Path) -> tuple[float, np.ndarray, np.ndarray]:
     """The whole ``wipelab track`` command: (pairs/s, points (n, 3), valid (n,))."""
+    shutil.rmtree(out, ignore_errors=True)  # a failed run must not leave an older track.csv
     command = [sys.executable, "-m", "wipelab", "track", str(demo.path), "-o", str(out), "-q"]
     if not (demo.path / "demo.toml").is_file():
         command += ["--color", demo.colour]
@@ -264,6 +284,9 @@ def main() -> None:
     parser.add_argument("--duration", type=float, default=30.0, help="seconds per scene")
     parser.add_argument("--synth-seeds", type=int, default=1, help="synth demos per pattern/Hz")
     parser.add_argument("--synth-duration", type=float, default=30.0)
+    parser.add_argument("--dev-seeds", type=lambda text: [int(v) for v in text.split(",")],
+                        default=[], metavar="N,N,...",
+                        help="development scenes to run as well (seeds < 10000, for tuning)")
     parser.add_argument("--workdir", type=Path,
                         default=Path(tempfile.gettempdir()) / "wipelab-bench-track",
                         help="where scenes are rendered (and reused by later runs)")
@@ -272,6 +295,7 @@ def main() -> None:
 
     demos = [("held out", held_out_demo(args.workdir, i, args.duration))
              for i in range(args.held_out)]
+    demos += [("dev", dev_demo(args.workdir, seed, args.duration)) for seed in args.dev_seeds]
     demos += [("synth", synth_demo(args.workdir, p, f, s, args.synth_duration))
               for p in PATTERNS for f in SYNTH_FREQUENCIES_HZ for s in range(args.synth_seeds)]
     print(f"load average at start: {' '.join(f'{v:.1f}' for v in os.getloadavg())} on "
@@ -297,7 +321,7 @@ def main() -> None:
               f"{base.shape_mm:13.1f}mm {base.bias_mm:6.1f} {base.invalid_visible_pct:5.1f} "
               f"{base.hidden_valid:4d}", flush=True)
     print("-" * len(header))
-    for kind in ("held out", "synth"):
+    for kind in ("held out", "dev", "synth"):
         summary(kind, [r for r in rows if r[0] == kind])
     worst_factors([r for r in rows if r[0] == "held out"])
     bias_directions([r for r in rows if r[0] == "held out"])
