@@ -146,9 +146,14 @@ class StaticBackground:
         count, labels, stats, _ = cv2.connectedComponentsWithStats(self.still, connectivity=8)
         covered = np.bincount(labels[under > 0], minlength=count)
         area = stats[:, cv2.CC_STAT_AREA]
-        for label in range(1, count):
-            if covered[label] >= 0.9 * area[label] and area[label] <= max_area * self.scale ** 2:
-                self.ghosts[labels == label] = True
+        ghosts = (covered >= 0.9 * area) & (area <= max_area * self.scale ** 2)
+        self._remember_ghosts(labels, np.flatnonzero(ghosts[1:]) + 1)
+
+    def _remember_ghosts(self, labels: np.ndarray, chosen: np.ndarray) -> None:
+        """The still things numbered ``chosen`` in ``labels`` (connected components of
+        :attr:`still`) are ghosts of the sponge."""
+        if len(chosen):
+            self.ghosts |= np.isin(labels, chosen)
         self._classify()
 
     @property
@@ -177,15 +182,14 @@ class StaticBackground:
                                                                             connectivity=8)
         if count <= 1:
             return
-        middle = (np.median(np.asarray(canvas_points), axis=0) + 0.5) * self.scale - 0.5
+        middle = self._background_pixels(np.median(np.asarray(canvas_points), axis=0))
         x, y = np.round(middle).astype(int)
         if not (0 <= x < self.size[0] and 0 <= y < self.size[1]):
             return
         label = labels[y, x]
         if label and stats[label, cv2.CC_STAT_AREA] <= max_area * self.scale ** 2 and \
                 np.linalg.norm(centroids[label] - middle) <= max_offset * self.scale:
-            self.ghosts[labels == label] = True
-        self._classify()
+            self._remember_ghosts(labels, np.array([label]))
 
     def release_visited(self, canvas_points: np.ndarray, max_area: float) -> None:
         """Forget the still things of at most ``max_area`` canvas pixels that the sponge has
@@ -195,14 +199,12 @@ class StaticBackground:
         count, labels, stats, _ = cv2.connectedComponentsWithStats(self.still, connectivity=8)
         if count <= 1:
             return
-        pixels = np.round((np.asarray(canvas_points) + 0.5) * self.scale - 0.5).astype(int)
+        pixels = np.round(self._background_pixels(canvas_points)).astype(int)
         inside = (pixels[:, 0] >= 0) & (pixels[:, 1] >= 0) & (pixels[:, 0] < self.size[0]) & \
             (pixels[:, 1] < self.size[1])
         visited = np.unique(labels[pixels[inside, 1], pixels[inside, 0]])
         small = stats[:, cv2.CC_STAT_AREA] <= max_area * self.scale ** 2
-        for label in visited[(visited > 0) & small[visited]]:
-            self.ghosts[labels == label] = True
-        self._classify()
+        self._remember_ghosts(labels, visited[(visited > 0) & small[visited]])
 
     def still_in_canvas_image(self, image: np.ndarray) -> np.ndarray | None:
         """Where a :meth:`canvas_image` shows a still thing of the sponge's colour as it
@@ -211,6 +213,11 @@ class StaticBackground:
             return None
         b, g, r = cv2.split(cv2.absdiff(image, self.mean))
         return (self.still > 0) & (cv2.max(cv2.max(b, g), r) < self.difference)
+
+    def _background_pixels(self, canvas_points: np.ndarray) -> np.ndarray:
+        """Background coordinates (..., 2) of canvas (full-resolution) points (..., 2): the
+        inverse of :meth:`canvas_pixels`."""
+        return (np.asarray(canvas_points, dtype=np.float64) + 0.5) * self.scale - 0.5
 
     def canvas_pixels(self, pixels: np.ndarray) -> np.ndarray:
         """Canvas (full-resolution) coordinates (n, 2) of background pixels (n, 2)."""
