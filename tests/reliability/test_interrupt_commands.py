@@ -67,3 +67,27 @@ def test_an_interrupted_command_leaves_nothing_and_reruns_to_the_same_bytes(stag
     assert process.wait(timeout=120) == 0, log.read_text()
     assert leftovers(tmp_path) == []
     assert output_files(tmp_path / output) == output_files(artefacts / output)
+
+
+def test_a_ctrl_c_between_drawing_a_bar_and_timing_it_still_ends_on_its_own_line(tmp_path,
+                                                                                  monkeypatch):
+    """tqdm draws a new bar before it stamps its start time; a Ctrl-C in between (CI on
+    2026-11-27, ``live``) left the bar and the message on one line."""
+    from click.testing import CliRunner
+    from tqdm import tqdm
+
+    from wipelab.cli import cli
+
+    draw = tqdm.refresh
+
+    def drawn_then_interrupted(bar, *args, **kwargs):
+        draw(bar, *args, **kwargs)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(tqdm, "refresh", drawn_then_interrupted)
+    result = CliRunner().invoke(cli, ["synth", str(tmp_path / "demo"), "--duration", "1"])
+    assert result.exit_code == 130, result.stderr
+    assert result.stderr.startswith("\rsynth:")
+    last_line = result.stderr.rstrip().split("\n")[-1].split("\r")[-1]
+    assert last_line == "interrupted: no output of the unfinished work was written"
+    assert list(tmp_path.iterdir()) == []

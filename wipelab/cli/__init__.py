@@ -86,7 +86,9 @@ class _WipelabGroup(click.Group):
         """Ctrl-C: one line and exit code 130; a stage's files appear only when it finishes."""
         from tqdm import tqdm
 
-        for bar in list(tqdm._instances):  # a bar the Ctrl-C cut off while it was drawn
+        for bar in list(tqdm._instances):  # a bar the Ctrl-C cut off, even inside tqdm()
+            if getattr(bar, "sp", None) is not None:  # drawn: close() alone keeps a bar it
+                bar.clear(nolock=True)  # drew but had not yet timed (tqdm 4.70)
             bar.close()
         click.echo("interrupted: no output of the unfinished work was written", err=True)
         ctx.exit(130)
