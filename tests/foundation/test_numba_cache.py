@@ -34,5 +34,5 @@ def test_the_online_kernel_depends_on_every_module_compiled_into_its_loop():
             "oscillators.py", "dmp.py", "derivatives.py", "tempo.py", "position_fit.py",
             "limit_cycle.py", "lwr.py", "normalise.py"} <= names
     assert not forget_stale_kernels(module.__name__)              # checked at import already
-    refinement = importlib.import_module("wipelab.vision._refinement_kernel")
+    refinement = importlib.import_module("wipelab.vision.pose_refinement")
     assert "_likelihood_kernel.py" in {path.name for path in dependency_files(refinement)}

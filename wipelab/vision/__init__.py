@@ -18,7 +18,7 @@ Modules (one concept each):
   as a box and how well a pose explains both images (per-sample loops compiled in
   ``_likelihood_kernel``; the colour blob's moments in ``_moments_kernel``);
 * :mod:`~wipelab.vision.particle_filter`, :mod:`~wipelab.vision.pose_refinement` - the
-  filter's building blocks and the Newton refinement;
+  filter's building blocks and the Newton refinement (compiled);
 * :mod:`~wipelab.vision.colour_regions` - the soft colour prior of a named colour, colour
   blobs with sub-pixel centroids;
 * :mod:`~wipelab.vision.acquisition` - telling the moving sponge from static things of its

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wipelab.vision._likelihood_kernel import contrast_derivatives, score_poses
-from wipelab.vision._refinement_kernel import refine_contrast
+from wipelab.vision.pose_refinement import refine_contrast
 from wipelab.vision.sampling import sample_bilinear
 from wipelab.vision.undistortion import pinhole
 from wipelab.vision.sponge_box import EDGE_FACES, EDGES, FACE_NORMALS, SpongeBox
@@ -296,7 +296,7 @@ class SilhouetteContrast:
 
     def __init__(self, views: list[tuple[ViewSamples, ViewImage]]):
         self.views = views
-        # the cameras as the compiled Newton loop takes them (see _refinement_kernel)
+        # the cameras as the compiled Newton loop takes them (see pose_refinement)
         self._kernel_views = tuple(
             (s.MA, s.MB, s.MC, s.weights, s.is_face, image.R_cam_track, image.t_cam_track,
              image.K, (float(image.origin[0]), float(image.origin[1])), image.probability)
@@ -328,9 +328,9 @@ class SilhouetteContrast:
 
     def refine(self, start: np.ndarray, scale: np.ndarray, iterations: int = 6,
                max_step: float = 4.0, tolerance: float = 0.1) -> tuple[np.ndarray, float]:
-        """Damped Newton ascent of the summed contrast from ``start`` (compiled; the same
-        steps as :func:`wipelab.vision.pose_refinement.refine_pose` with
-        :meth:`derivatives` and this object as the score, which see for the parameters).
+        """Damped Newton ascent of the summed contrast from ``start``
+        (:func:`wipelab.vision.pose_refinement.refine_contrast`, which see for the method
+        and the parameters).
 
         Returns
         -------
