@@ -197,7 +197,9 @@ def learn(trajectory: str | os.PathLike, out_dir: str | os.PathLike,
     ------
     InputError
         Missing/unreadable file, missing columns, NaN/inf, too short, time not increasing,
-        movement not periodic, or (online) never two periods without a gap.
+        or movement not periodic. Online learning that never locks onto a period (never two
+        periods without a gap) falls back to the offline fit, with a line on stderr and
+        ``online_never_locked`` in the model's source.
     """
     path = Path(trajectory)
     t, Y, valid = _demonstration(path, params)
@@ -216,10 +218,13 @@ def learn(trajectory: str | os.PathLike, out_dir: str | os.PathLike,
             model, history = learn_online(t, Y, online, params.dofs, reference, source,
                                           progress=bar.update, valid=valid)
         if history.hand_overs[-1] == 0:
-            raise InputError(f"{path}: online learning never locked onto a period (its detector "
-                             f"needs two periods without a gap); --mode offline fits the whole "
-                             f"recording")
-    else:
+            # gaps too many for the detector's two periods in a row: the whole recording still
+            # holds the movement, and the user gets a model, told how it was made
+            source["online_never_locked"] = True
+            print(f"learn: {path}: online learning never locked onto a period (its detector "
+                  f"needs two periods without a gap); the model is fitted offline to the whole "
+                  f"recording", file=sys.stderr)
+    if params.mode == "offline" or source.get("online_never_locked"):
         offline = OfflineParameters(kernels=params.kernels, width=params.width,
                                     min_frequency_hz=params.min_frequency_hz,
                                     max_frequency_hz=params.max_frequency_hz)
