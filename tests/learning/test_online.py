@@ -63,6 +63,28 @@ def test_a_gap_teaches_nothing_and_the_oscillator_runs_through_it():
     assert frequency_hz == pytest.approx(1.0, rel=3e-3)
 
 
+def test_frames_dropped_here_and_there_do_not_keep_the_detector_from_locking():
+    """0.8 Hz at 30 Hz for 20 s with a gap of 1-6 frames every 8-20 frames (a tracker that
+    drops frames): the detector is carried across each gap on the last sample (bridge_s), so
+    the learner locks within the first seconds; restarted by every gap (bridge_s = 0), it
+    never sees two periods in a row and never locks."""
+    rate_hz = 30.0
+    t = np.arange(0, 20, 1 / rate_hz)
+    Y, _ = wiping_signal(t, 0.8, seed=4)
+    rng = np.random.default_rng(5)
+    valid = np.ones(t.size, bool)
+    k = int(rng.integers(8, 20))
+    while k < t.size:
+        valid[k:k + int(rng.integers(1, 7))] = False
+        k += int(rng.integers(8, 20))
+    assert 0.1 < 1 - valid.mean() < 0.3
+    model, history = learn_online(t, Y, OnlineParameters(), valid=valid)
+    assert history.hand_overs[t < 5.0][-1] >= 1
+    assert model.frequency_hz == pytest.approx(0.8, rel=5e-3)
+    _, restarted = learn_online(t, Y, OnlineParameters(bridge_s=0.0), valid=valid)
+    assert restarted.hand_overs[-1] == 0
+
+
 def test_follows_a_human_tempo_and_keeps_the_demonstrated_frequency():
     """60 s of a person's line strokes at 0.5 Hz (synth's motion model: tempo wandering by
     4 %): the model's frequency is within 1 % of 0.5 Hz, no change of tempo is found in the

@@ -140,6 +140,8 @@ class OnlineParameters:
     min_frequency_hz: float = 0.1           # longest period the anchor window and detector cover (Hz)
     statistics_periods: int = 1             # periods over which Omega, g and r are averaged
     start_up: bool = True                   # detect the period and hand it to the canonical system
+    bridge_s: float = 0.15                  # a gap up to this long (s) carries the detector on the
+                                            # last observed sample; a longer one restarts it
     detector: PeriodDetectorParameters = field(default_factory=PeriodDetectorParameters)
     lock_search: float = 0.01               # the hand-over refines Omega within +- this (relative)
     relock_tolerance: float | None = 0.3    # hand over again when the detector's held period and the
@@ -171,6 +173,8 @@ class OnlineParameters:
             raise ValueError(f"relock_tolerance must be > 0 or None, got {self.relock_tolerance}")
         if not self.frequency_periods > 0.0 or not self.memory_periods > 0.0:
             raise ValueError("frequency_periods and memory_periods must be > 0")
+        if not self.bridge_s >= 0.0:
+            raise ValueError(f"bridge_s must be >= 0, got {self.bridge_s}")
         if self.change_periods < 1:
             raise ValueError(f"change_periods must be >= 1, got {self.change_periods}")
 
@@ -249,7 +253,8 @@ def kernel_settings(n_dofs: int, dt: float, params: OnlineParameters,
         offset=0.0 if p.canonical == "afs" else 1.0,
         normaliser_rate=dt / p.normaliser_time_constant_s,
         statistics_periods=float(p.statistics_periods),
-        floor_omega=2.0 * math.pi * p.min_frequency_hz, start_up=p.start_up, detector=detector,
+        floor_omega=2.0 * math.pi * p.min_frequency_hz, start_up=p.start_up,
+        bridge_samples=int(round(p.bridge_s / dt)), detector=detector,
         confirm=p.detector.confirm, n_terms=p.afs.n_terms if p.canonical == "afs" else 3,
         lock_search=p.lock_search, relock_tolerance=p.relock_tolerance or 0.0,
         change_relock_tolerance=p.change_relock_tolerance or 0.0,
@@ -282,7 +287,7 @@ def new_learner_state(n_dofs: int, dt: float, params: OnlineParameters,
         output=np.zeros(n_dofs), velocity=np.zeros(n_dofs), phase=one(), omega=one(),
         frequency_hz=one(), weights=np.zeros((n_dofs, p.kernels)), goal=np.zeros(n_dofs),
         amplitude=np.ones(n_dofs), hand_overs=one(np.int64), count=one(np.int64),
-        valid_run=one(np.int64), locked=one(np.int64), relock_until=one(),
+        valid_run=one(np.int64), gap_run=one(np.int64), locked=one(np.int64), relock_until=one(),
         moving=np.zeros(n_dofs, dtype=np.bool_), previous_u=np.zeros(n_dofs),
         oscillators=oscillators, range=new_running_range(n_dofs),
         statistics=new_period_window(n_dofs, capacity),

@@ -56,6 +56,7 @@ class KernelSettings(NamedTuple):
     statistics_periods: float      # g, r and the fundamental over this many periods
     floor_omega: float             # Omega is at least this (rad/s)
     start_up: bool                 # the period detector hands over
+    bridge_samples: int            # a gap this short carries the detector on the last sample
     detector: DetectorSettings
     confirm: float                 # the detector's (1 + confirm) periods are fitted at a hand-over
     n_terms: int                   # terms of the series fitted at a hand-over
@@ -95,6 +96,7 @@ class LearnerState(NamedTuple):
     hand_overs: np.ndarray         # (1,) int64, detected periods handed over so far
     count: np.ndarray              # (1,) int64, samples so far
     valid_run: np.ndarray          # (1,) int64, valid samples since the last gap
+    gap_run: np.ndarray            # (1,) int64, samples of the gap so far (0: observing)
     locked: np.ndarray             # (1,) int64, 1 once a period was handed over
     relock_until: np.ndarray       # (1,) time until which a change of tempo may re-lock (s)
     moving: np.ndarray             # (d,) bool, DOFs with r > 0
@@ -269,13 +271,24 @@ def _learn_lwr(settings: KernelSettings, state: LearnerState, y, phase: float, o
 
 
 @njit(cache=True)
+def _detect(settings: KernelSettings, state: LearnerState, y) -> float:
+    """Remember y (d,) for a hand-over's fit and pass it to the period detector; its period
+    (s) when it holds one, else 0."""
+    slot = state.recent_count[0] % state.recent.shape[0]
+    state.recent[slot] = y
+    state.recent_count[0] += 1
+    return detector_update(settings.detector, state.detector, y)
+
+
+@njit(cache=True)
 def learner_step(settings: KernelSettings, state: LearnerState, y, valid: bool) -> None:
     """Process one sample y (d,) in m (a placeholder when not ``valid``); update ``state``.
 
     1. the period detector: at the sample where it first holds a period, hand it over (the
        start-up); afterwards it supervises: hand over again when the period it holds and the
        fundamental differ by more than ``relock_tolerance``, or by more than
-       ``change_relock_tolerance`` shortly after a change of tempo;
+       ``change_relock_tolerance`` shortly after a change of tempo (a gap of at most
+       ``bridge_samples`` carries the detector on the last sample, a longer one restarts it);
     2. g and r over the last period, the normalised input, and the canonical system over the
        sample interval (a gap: it runs on at its frequency, learning nothing);
     3. the fundamental Omega: the oscillator's frequency averaged over the last period; the
@@ -293,17 +306,23 @@ def learner_step(settings: KernelSettings, state: LearnerState, y, valid: bool) 
     # 1. detector and hand-over
     period = 0.0
     if not valid:
-        if state.valid_run[0] > 0 and settings.start_up:
-            detector_restart(state.detector)
-            state.recent_count[0] = 0
         state.valid_run[0] = 0
+        state.gap_run[0] += 1
+        if settings.start_up and state.recent_count[0] > 0:
+            if state.gap_run[0] <= settings.bridge_samples:
+                # a short gap (a frame or a few the tracker dropped): the detector, which
+                # compares samples a fixed time apart, goes on with the last sample held;
+                # a period it finds now is handed over at the next observed sample
+                held = state.recent[(state.recent_count[0] - 1) % state.recent.shape[0]]
+                _detect(settings, state, held.copy())
+            else:
+                detector_restart(state.detector)
+                state.recent_count[0] = 0
     else:
         state.valid_run[0] += 1
+        state.gap_run[0] = 0
         if settings.start_up:
-            slot = state.recent_count[0] % state.recent.shape[0]
-            state.recent[slot] = y
-            state.recent_count[0] += 1
-            period = detector_update(settings.detector, state.detector, y)
+            period = _detect(settings, state, y)
     after_change = time < state.relock_until[0]
     if period > 0.0 and state.locked[0] == 1:
         disagreement = abs(state.omega[0] * period / (2.0 * math.pi) - 1.0)

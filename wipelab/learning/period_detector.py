@@ -33,8 +33,10 @@ to 6.9 % (more than 1 % in over 5 % of them), against at most 0.45 % with ``conf
 After the hand-over the detector keeps running as the learner's supervisor: whenever its
 estimate holds and disagrees with the canonical system's fundamental by more than the
 learner's ``relock_tolerance``, the learner hands over again (see
-:mod:`wipelab.learning.online`). A gap in the input (samples marked invalid) restarts it:
-the lags compare samples a fixed time apart, which a gap would break.
+:mod:`wipelab.learning.online`). A gap in the input (samples marked invalid) longer than
+the learner's ``bridge_s`` restarts it: the lags compare samples a fixed time apart, which a
+gap would break; across a shorter one (frames the tracker dropped) the learner holds the last
+sample, which costs the difference function a little, a restart two periods.
 
 All of it is compiled (:func:`detector_update` on a :class:`DetectorState`): the online
 learner's kernel calls it per sample.
