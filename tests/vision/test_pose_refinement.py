@@ -1,21 +1,16 @@
 """The Newton pose refinement: its linear solve, its step rule, and the refinement of a box
 pose on rendered silhouettes."""
 
-import cv2
 import numpy as np
 import pytest
 
+from tests.vision.rendered_sponge import POSE, rendered_contrast
 from wipelab.vision.pose_refinement import newton_step, solve
-from wipelab.vision.sponge_box import SpongeBox, yaw_rotation
-from wipelab.vision.sponge_likelihood import (SilhouetteContrast, SpongeTemplate, ViewImage,
-                                              facing_camera, view_samples)
+from wipelab.vision.sponge_likelihood import SilhouetteContrast
 
 SCALE = np.array([0.001, 0.001, 0.001, 0.015])   # the box tracker's refine_steps
 MAX_STEP = 4.0
 TOLERANCE = 0.1                                   # SilhouetteContrast.refine's default
-BOX = SpongeBox()
-POSE = np.array([0.02, -0.01, 0.03, 0.4])
-K = np.array([[530.0, 0.0, 320.0], [0.0, 530.0, 240.0], [0.0, 0.0, 1.0]])
 # a concave quadratic -d.A.d, d = pose - OPTIMUM: correlated, curvatures of the axes' size
 OPTIMUM = np.array([0.01, -0.02, 0.9, 0.3])
 A = np.diag(1 / SCALE) @ (np.eye(4) + 0.3 * np.ones((4, 4))) @ np.diag(1 / SCALE)
@@ -76,41 +71,10 @@ def test_newton_step_climbs_the_gradient_where_the_model_does_not_curve_down():
     np.testing.assert_allclose(step, [0.0, 0.0, 0.0, SCALE[3]], rtol=1e-12)
 
 
-def _look_at(eye: np.ndarray) -> np.ndarray:
-    """Rotation (track -> optical frame) of a camera at ``eye`` looking at the sponge."""
-    z = (POSE[:3] - eye) / np.linalg.norm(POSE[:3] - eye)
-    x = np.cross(z, [0.0, 0.0, 1.0])
-    x /= np.linalg.norm(x)
-    return np.array([x, np.cross(z, x), z])
-
-
-def _feature_image(R: np.ndarray, t: np.ndarray, supersampling: int = 16) -> ViewImage:
-    """The sponge's silhouette at POSE, its pixels covered by area (rendered ``supersampling``
-    times finer, pixel centres at integer coordinates), blurred: the feature the refinement
-    climbs. (OpenCV's anti-aliased fill grows a shape by about half a pixel.)"""
-    corners = (BOX.corners() @ yaw_rotation(POSE[3]).T + POSE[:3]) @ R.T + t
-    pixels = corners[:, :2] / corners[:, 2:] * [K[0, 0], K[1, 1]] + K[:2, 2]
-    fine = np.zeros((480 * supersampling, 640 * supersampling), np.uint8)
-    hull = cv2.convexHull(np.round(((pixels + 0.5) * supersampling - 0.5) * 16).astype(np.int32))
-    cv2.fillConvexPoly(fine, hull, 255, shift=4)
-    image = cv2.resize(fine.astype(np.float32) / 255, (640, 480), interpolation=cv2.INTER_AREA)
-    return ViewImage(cv2.GaussianBlur(image, (0, 0), 1.5), (0.0, 0.0), K, R, t)
-
-
 @pytest.fixture(scope="module")
 def contrast() -> SilhouetteContrast:
-    """Two cameras, 0.6 m apart, looking down at the sponge from either side: its pose is
-    the peak of their summed contrast. (A short-baseline pair puts the peak up to a
-    millimetre along the line of sight, where the silhouette's size alone tells depth and
-    the blur's rounded corners shrink it.)"""
-    views = []
-    for eye in (np.array([-0.3, -0.2, 0.35]), np.array([0.3, -0.25, 0.4])):
-        R = _look_at(eye)
-        faces, edges = facing_camera(yaw_rotation(POSE[3]), POSE[:3], eye, BOX)
-        samples = view_samples(SpongeTemplate.build(BOX, 0.014, 0.016), R, faces, edges,
-                               (0.001, 0.0025, 0.0045))
-        views.append((samples, _feature_image(R, -R @ eye)))
-    return SilhouetteContrast(views)
+    """The summed contrast of two cameras 0.6 m apart: its peak is the rendered pose."""
+    return rendered_contrast()
 
 
 @pytest.mark.parametrize("offset", [[0.003, -0.002, 0.002, 0.05], [-0.004, 0.001, -0.003, -0.08],

@@ -30,7 +30,9 @@ zero pivot marks the Hessian singular, and the gradient step is taken.
 
 A camera is passed as the tuple ``(MA, MB, MC, weights, is_face, R, t, K, origin, image)``
 of :func:`wipelab.vision._likelihood_kernel.score_poses`' arguments; ``views`` is a tuple
-of them.
+of them. :func:`summed_contrast` and :func:`summed_derivatives` sum the cameras' scores
+and derivatives; :class:`~wipelab.vision.sponge_likelihood.SilhouetteContrast` calls them
+too.
 
 Everything is compiled with numba, so a refinement costs its image reads. Numba's on-disk
 cache (``cache=True``) is refreshed when this file or any wipelab module it uses changes
@@ -102,8 +104,9 @@ def newton_step(gradient, hessian, scale, max_step):
 
 
 @njit(cache=True)
-def _derivatives(views, pose):
-    """Summed contrast of all cameras at ``pose`` with its gradient and Hessian."""
+def summed_derivatives(views, pose):
+    """Summed contrast of all cameras at ``pose`` (4,) with its gradient (4,) and Hessian
+    (4, 4)."""
     value, gradient, hessian = 0.0, np.zeros(4), np.zeros((4, 4))
     for view in views:
         v, g, h = contrast_derivatives(pose, view[0], view[1], view[2], view[3], view[5],
@@ -115,8 +118,8 @@ def _derivatives(views, pose):
 
 
 @njit(cache=True)
-def _scores(views, poses):
-    """Summed contrast of all cameras for poses (n, 4)."""
+def summed_contrast(views, poses):
+    """Summed contrast of all cameras for poses (n, 4), shape (n,)."""
     total = np.zeros(poses.shape[0])
     for view in views:
         total += score_poses(poses, view[0], view[1], view[2], view[3], view[4], view[5],
@@ -145,7 +148,7 @@ def refine_contrast(views, start, scale, iterations, max_step, tolerance):
     value = -np.inf
     steps = np.empty((6, 4))
     for _ in range(iterations):
-        value, gradient, hessian = _derivatives(views, pose)
+        value, gradient, hessian = summed_derivatives(views, pose)
         step = newton_step(gradient, hessian, scale, max_step)
         if _small(step, scale, tolerance):  # converged: no need to try the step
             break
@@ -158,7 +161,7 @@ def refine_contrast(views, start, scale, iterations, max_step, tolerance):
         for m in range(3):
             steps[m] = _NEWTON_FRACTIONS[m] * step
             steps[3 + m] = _CLIMB_FRACTIONS[m] * climb
-        values = _scores(views, pose + steps)
+        values = summed_contrast(views, pose + steps)
         best = int(np.argmax(values))
         if values[best] <= value:  # no progress in any direction: converged
             break

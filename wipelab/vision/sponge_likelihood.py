@@ -17,9 +17,12 @@ image (:mod:`wipelab.vision.undistortion`) and read bilinearly. Per camera:
 
 The particle filter reads the histogram back-projection (a probability); the refinement
 (:class:`SilhouetteContrast`) reads a linear colour feature, whose blurred edges stay
-centred on the true outline. The per-sample loops run compiled
-(:mod:`wipelab.vision._likelihood_kernel`); the ``*_reference`` functions here are their
-numpy references, which tests hold them to.
+centred on the true outline.
+
+The per-sample loops are compiled with numba and are the only implementation: how a sample
+is projected and read, and how the contrast's gradient and Hessian are computed, is
+described in :mod:`wipelab.vision._likelihood_kernel`. This module builds the samples and
+images and wraps the kernels (:func:`score_view`, :class:`SilhouetteContrast`).
 """
 
 from __future__ import annotations
@@ -28,10 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wipelab.vision._likelihood_kernel import contrast_derivatives, score_poses
-from wipelab.vision.pose_refinement import refine_contrast
-from wipelab.vision.sampling import sample_bilinear
-from wipelab.vision.undistortion import pinhole
+from wipelab.vision._likelihood_kernel import score_poses
+from wipelab.vision.pose_refinement import refine_contrast, summed_contrast, summed_derivatives
 from wipelab.vision.sponge_box import EDGE_FACES, EDGES, FACE_NORMALS, SpongeBox
 
 
@@ -202,16 +203,10 @@ class ViewImage:
     t_cam_track: np.ndarray
 
 
-def _camera_points(poses: np.ndarray, samples: ViewSamples, image: ViewImage) -> np.ndarray:
-    a = poses[:, :3] @ image.R_cam_track.T + image.t_cam_track
-    c, s = np.cos(poses[:, 3])[:, None, None], np.sin(poses[:, 3])[:, None, None]
-    return a[:, None, :] + c * samples.MA + s * samples.MB + samples.MC  # (n, k, 3)
-
-
 def score_view(poses: np.ndarray, samples: ViewSamples, image: ViewImage
                ) -> tuple[np.ndarray, np.ndarray]:
-    """Contrast and coverage of many poses in one camera (compiled; see
-    :func:`score_view_reference`).
+    """Contrast and coverage of many poses in one camera
+    (:func:`wipelab.vision._likelihood_kernel.score_poses`, which see for the method).
 
     Parameters
     ----------
@@ -230,61 +225,13 @@ def score_view(poses: np.ndarray, samples: ViewSamples, image: ViewImage
                        image.t_cam_track, image.K, image.origin, image.probability, True)
 
 
-def score_view_reference(poses: np.ndarray, samples: ViewSamples, image: ViewImage
-                         ) -> tuple[np.ndarray, np.ndarray]:
-    """Numpy reference of :func:`score_view` (image read through ``cv2.remap``)."""
-    uv = pinhole(_camera_points(poses, samples, image), image.K) - np.asarray(image.origin)
-    values = sample_bilinear(image.probability, uv).astype(np.float64)
-    contrast = values @ samples.weights
-    faces = values[:, samples.is_face]
-    coverage = faces.mean(axis=1) if faces.shape[1] else np.zeros(len(uv))
-    return contrast, coverage
-
-
-#: Offsets (pixels) at which the image is read around each sample for its derivatives.
-_STENCIL = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1], [1, 1], [1, -1], [-1, 1],
-                     [-1, -1]], dtype=np.float64)
-
-
-def contrast_derivatives_reference(pose: np.ndarray, samples: ViewSamples, image: ViewImage
-                                   ) -> tuple[float, np.ndarray, np.ndarray]:
-    """Numpy reference of the compiled contrast derivatives of one camera: the contrast of
-    ``pose`` (4,), its gradient (4,) and Hessian (4, 4).
-
-    The image is read bilinearly at each sample's pixel and at +-1 pixel around it for its
-    gradient g and Hessian H, chained with the pinhole's analytic Jacobian J (k, 2, 4) of
-    the pixels in the pose: ``grad = sum w J^T g``, ``Hess = sum w J^T H J``.
-    """
-    K = image.K
-    X = _camera_points(pose[None], samples, image)[0]  # (k, 3)
-    inverse_z = 1.0 / X[:, 2]
-    uv = pinhole(X, K) - np.asarray(image.origin)
-    # dX/d(x, y, z, yaw): R_cam_track for the position, R Rz'(yaw) s for the yaw
-    c, s = np.cos(pose[3]), np.sin(pose[3])
-    d_yaw = -s * samples.MA + c * samples.MB  # (k, 3)
-    d_point = np.concatenate([np.broadcast_to(image.R_cam_track, (len(X), 3, 3)),
-                              d_yaw[:, :, None]], axis=2)  # (k, 3, 4)
-    Ju = (K[0, 0] * d_point[:, 0] + K[0, 1] * d_point[:, 1]) * inverse_z[:, None] \
-        - ((K[0, 0] * X[:, 0] + K[0, 1] * X[:, 1]) * inverse_z ** 2)[:, None] * d_point[:, 2]
-    Jv = K[1, 1] * (d_point[:, 1] * inverse_z[:, None]
-                    - (X[:, 1] * inverse_z ** 2)[:, None] * d_point[:, 2])
-    f = sample_bilinear(image.probability, uv[:, None, :] + _STENCIL).astype(np.float64)
-    w = samples.weights
-    gu, gv = 0.5 * (f[:, 1] - f[:, 2]), 0.5 * (f[:, 3] - f[:, 4])
-    huu, hvv = f[:, 1] - 2 * f[:, 0] + f[:, 2], f[:, 3] - 2 * f[:, 0] + f[:, 4]
-    huv = 0.25 * (f[:, 5] - f[:, 6] - f[:, 7] + f[:, 8])
-    gradient = (w * gu) @ Ju + (w * gv) @ Jv
-    hessian = (Ju.T * (w * huu)) @ Ju + (Jv.T * (w * hvv)) @ Jv \
-        + (Ju.T * (w * huv)) @ Jv + (Jv.T * (w * huv)) @ Ju
-    return float(w @ f[:, 0]), gradient, hessian
-
-
 class SilhouetteContrast:
     """Summed silhouette contrast of both cameras, for Newton refinement (compiled).
 
     The image is read bilinearly at the sample pixels and at +-1 pixel around them for its
     gradient and Hessian, chained with the projection's Jacobian (see
-    :func:`contrast_derivatives_reference`).
+    :func:`wipelab.vision._likelihood_kernel.contrast_derivatives`); the sums over the
+    cameras and the Newton loop are :mod:`wipelab.vision.pose_refinement`'s.
 
     Parameters
     ----------
@@ -296,7 +243,7 @@ class SilhouetteContrast:
 
     def __init__(self, views: list[tuple[ViewSamples, ViewImage]]):
         self.views = views
-        # the cameras as the compiled Newton loop takes them (see pose_refinement)
+        # the cameras as the compiled loops over them take them (see pose_refinement)
         self._kernel_views = tuple(
             (s.MA, s.MB, s.MC, s.weights, s.is_face, image.R_cam_track, image.t_cam_track,
              image.K, (float(image.origin[0]), float(image.origin[1])), image.probability)
@@ -304,27 +251,13 @@ class SilhouetteContrast:
 
     def __call__(self, poses: np.ndarray) -> np.ndarray:
         """Summed contrast of poses (n, 4), shape (n,)."""
-        poses = np.ascontiguousarray(poses, dtype=np.float64)
-        total = np.zeros(len(poses))
-        for samples, image in self.views:
-            total += score_poses(poses, samples.MA, samples.MB, samples.MC, samples.weights,
-                                 samples.is_face, image.R_cam_track, image.t_cam_track,
-                                 image.K, image.origin, image.probability, False)[0]
-        return total
+        return summed_contrast(self._kernel_views, np.ascontiguousarray(poses, dtype=np.float64))
 
     def derivatives(self, pose: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
         """Summed contrast at ``pose`` with its gradient (4,) and Hessian (4, 4)."""
-        pose = np.ascontiguousarray(pose, dtype=np.float64)
-        value, gradient, hessian = 0.0, np.zeros(4), np.zeros((4, 4))
-        for samples, image in self.views:
-            v, g, h = contrast_derivatives(pose, samples.MA, samples.MB, samples.MC,
-                                           samples.weights, image.R_cam_track,
-                                           image.t_cam_track, image.K, image.origin,
-                                           image.probability)
-            value += v
-            gradient += g
-            hessian += h
-        return value, gradient, hessian
+        value, gradient, hessian = summed_derivatives(
+            self._kernel_views, np.ascontiguousarray(pose, dtype=np.float64))
+        return float(value), gradient, hessian
 
     def refine(self, start: np.ndarray, scale: np.ndarray, iterations: int = 6,
                max_step: float = 4.0, tolerance: float = 0.1) -> tuple[np.ndarray, float]:
