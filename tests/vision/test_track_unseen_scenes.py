@@ -14,7 +14,7 @@ from click.testing import CliRunner
 
 from tests.stereo_scenes import render_scene
 from wipelab.cli import cli
-from wipelab.stages.track import TrackParams, open_demo, run_tracker
+from wipelab.stages.track import TrackParams, open_demo, run_tracker, track_backwards
 from wipelab.trajectory_csv import read_trajectory
 from wipelab.vision.colour_model import ColourSource
 from wipelab.vision.projection import invert_transform, transform_points
@@ -89,3 +89,30 @@ def test_a_colour_the_sponge_does_not_have_is_refused(scenes, tmp_path):
                                       "--color", "purple", "-q"])
     assert result.exit_code == 2
     assert "--color purple" in result.output and not (tmp_path / "t").exists()
+
+
+def test_followed_backwards_from_a_later_frame_the_sponge_is_where_it_was(scenes):
+    """track_backwards, seeded with the tracking pass's points of three frames in the middle,
+    over every frame before them (latest first): what it reports lies on the sponge, it
+    reports nothing while the sponge is hidden, and it follows the sponge back most of the
+    way (the tracking pass uses it for the frames before it first found the sponge)."""
+    points, seen, colour, _ = _truth(scenes[SEEDS[0]])
+    demo = open_demo(scenes[SEEDS[0]])
+    tracker = SpongeTracker(demo.calibration, ColourSource(name=colour))
+    result = run_tracker(tracker, demo.reader, TrackParams(), quiet=True)
+    valid = result.valid
+    start = next(k for k in range(len(valid) // 2, len(valid) - 3) if valid[k:k + 3].all())
+    T_left_track = invert_transform(demo.calibration.T_track_left)
+    seed = list(transform_points(T_left_track, result.poses[start:start + 3, :3]))
+    before = [(k, left, right) for k, (left, right) in enumerate(demo.reader) if k < start]
+    found = {}
+    track_backwards(tracker, seed, reversed(before), lambda k, e: found.__setitem__(k, e.pose))
+    frames = np.array(sorted(found))
+    visible = seen[:start].min(axis=1) >= 0.999
+    assert not (seen[frames].max(axis=1) == 0).any()
+    assert np.isin(np.flatnonzero(visible), frames).mean() > 0.9
+    # the same visible part of the sponge as the forward track: the same bias, the same shape
+    error = np.array([found[k][:3] for k in frames]) - points[frames]
+    forward = result.poses[valid, :3] - points[valid]
+    assert np.linalg.norm(error.mean(axis=0) - forward.mean(axis=0)) < 0.005
+    assert np.sqrt(np.mean(np.sum((error - forward.mean(axis=0)) ** 2, axis=1))) < 0.006

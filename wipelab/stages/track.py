@@ -28,6 +28,7 @@ import queue
 import sys
 import tempfile
 import threading
+from collections import deque
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field, replace
@@ -60,6 +61,11 @@ from wipelab.vision.tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_MONO,
 from wipelab.vision.video_io import H264Writer, StereoVideoReader
 
 DEFAULT_COLOUR = "yellow"
+#: Frames before the tracking pass's first valid one are kept, up to this many bytes, to
+#: follow the sponge back to the start (:func:`track_backwards`).
+BACKWARD_BYTES = 400_000_000
+#: Points of the first valid frames that start the backward track.
+SEED_FRAMES = 3
 LEFT_FRAME, RIGHT_FRAME = "stereo_left_optical", "stereo_right_optical"
 
 
@@ -313,9 +319,10 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
 
     Two passes: a warm-up over the first ``params.warmup`` seconds (longer until the sponge
     is found and the plane it moves in is known), then, with what it learnt, the tracking
-    pass from the first frame (so that the first seconds are tracked too). ``on_frame`` is
-    called with each frame's index and estimate of the tracking pass, ``frame_sink`` with
-    each of its frame pairs.
+    pass from the first frame (so that the first seconds are tracked too); the frames before
+    that pass's first valid one are then followed backwards from it
+    (:func:`track_backwards`). ``on_frame`` is called with each frame's index and estimate
+    of the tracking pass, ``frame_sink`` with each of its frame pairs.
     """
     n = reader.frame_count
     poses = np.full((n, 4), np.nan)
@@ -341,20 +348,35 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
     if not tracker.identified:
         return None
     tracker.restart()
+    pair_bytes = 6 * reader.left.width * reader.left.height
+    before_first: deque = deque(maxlen=max(1, BACKWARD_BYTES // pair_bytes))
+    first, seed = None, []
+
+    def keep(k: int, estimate: FrameEstimate) -> None:
+        poses[k], valid[k], quality[k] = estimate.pose, estimate.valid, estimate.quality
+        areas[k] = estimate.areas
+        if len(estimate.particles):
+            pick = np.linspace(0, len(estimate.particles) - 1, m).astype(int)
+            particles[k] = estimate.particles[pick]
+
     with tqdm(total=n, desc="track", unit="frame", disable=quiet, file=sys.stderr,
               leave=False) as bar:
         for k, (left, right) in enumerate(reader):
             if frame_sink is not None:
                 frame_sink(left, right)
             estimate = tracker.step(left, right)
-            poses[k], valid[k], quality[k] = estimate.pose, estimate.valid, estimate.quality
-            areas[k] = estimate.areas
-            if len(estimate.particles):
-                pick = np.linspace(0, len(estimate.particles) - 1, m).astype(int)
-                particles[k] = estimate.particles[pick]
+            keep(k, estimate)
             if on_frame is not None:
                 on_frame(k, estimate)
+            if first is None and estimate.valid:
+                first = k
+            if first is None:
+                before_first.append((k, left, right))
+            elif len(seed) < SEED_FRAMES:
+                seed = [p for f, p in tracker.region.history if f >= first]
             bar.update()
+    if before_first and seed:
+        track_backwards(tracker, seed, reversed(before_first), keep)
     if valid.sum() < 2:  # no movement to measure the demonstration area from
         return None
     t = np.arange(n) / reader.fps
@@ -365,6 +387,23 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
                        tracker.calibration.track_frame, areas, particles,
                        None if sponge is None else (sponge.length, sponge.width, sponge.height),
                        float(tracker.region.size))
+
+
+def track_backwards(tracker: SpongeTracker, seed: list[np.ndarray], pairs,
+                    keep: Callable[[int, FrameEstimate], None]) -> None:
+    """Follow the sponge back in time from the tracking pass's first valid frame over the
+    frames before it (``pairs``: (index, left, right), latest first), handing each valid
+    estimate to ``keep`` (valid by the rules of the forward pass; a miss leaves its verdict). The sponge often rests where the demonstration starts, as still
+    as a thing of its colour: the search cannot tell it, but the track that leaves that
+    place, followed backwards, leads to it. ``seed``: the region's points (left optical
+    frame) of the first valid frames, earliest first."""
+    tracker.restart()
+    for point in reversed(seed):
+        tracker.region.observe(point)
+    for k, left, right in pairs:
+        estimate = tracker.step(left, right)
+        if estimate.valid:
+            keep(k, estimate)
 
 
 def tracked_csv_columns(poses: np.ndarray, valid: np.ndarray, quality: np.ndarray,
