@@ -210,7 +210,8 @@ def learn(trajectory: str | os.PathLike, out_dir: str | os.PathLike,
     source = {"file": path.name, "sha256": sha256_file(path), "stage": "learn",
               "parameters": parameters, "reference_dof": params.dofs[reference],
               "periodicity": round(estimate.score, 6)}
-    if params.mode == "online":
+    whole_recording = params.mode == "offline"
+    if not whole_recording:
         online = OnlineParameters(canonical=params.canonical, kernels=params.kernels,
                                   width=params.width)
         with tqdm(total=t.size, desc="learn", unit="sample", disable=quiet, file=sys.stderr,
@@ -220,11 +221,11 @@ def learn(trajectory: str | os.PathLike, out_dir: str | os.PathLike,
         if history.hand_overs[-1] == 0:
             # gaps too many for the detector's two periods in a row: the whole recording still
             # holds the movement, and the user gets a model, told how it was made
-            source["online_never_locked"] = True
+            source["online_never_locked"] = whole_recording = True
             print(f"learn: {path}: online learning never locked onto a period (its detector "
                   f"needs two periods without a gap); the model is fitted offline to the whole "
                   f"recording", file=sys.stderr)
-    if params.mode == "offline" or source.get("online_never_locked"):
+    if whole_recording:
         offline = OfflineParameters(kernels=params.kernels, width=params.width,
                                     min_frequency_hz=params.min_frequency_hz,
                                     max_frequency_hz=params.max_frequency_hz)

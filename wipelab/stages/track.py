@@ -372,8 +372,8 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
                 first = k
             if first is None:
                 before_first.append((k, left, right))
-            elif len(seed) < SEED_FRAMES:
-                seed = [p for f, p in tracker.region.history if f >= first]
+            elif k < first + SEED_FRAMES:  # the region's points of the first valid frames
+                seed = [p for f, p in tracker.region.history if f >= first] or seed
             bar.update()
     if before_first and seed:
         track_backwards(tracker, seed, reversed(before_first), keep)
@@ -393,10 +393,11 @@ def track_backwards(tracker: SpongeTracker, seed: list[np.ndarray], pairs,
                     keep: Callable[[int, FrameEstimate], None]) -> None:
     """Follow the sponge back in time from the tracking pass's first valid frame over the
     frames before it (``pairs``: (index, left, right), latest first), handing each valid
-    estimate to ``keep`` (valid by the rules of the forward pass; a miss leaves its verdict). The sponge often rests where the demonstration starts, as still
-    as a thing of its colour: the search cannot tell it, but the track that leaves that
-    place, followed backwards, leads to it. ``seed``: the region's points (left optical
-    frame) of the first valid frames, earliest first."""
+    estimate to ``keep`` (valid by the rules of the forward pass; a miss leaves its
+    verdict). The sponge often rests where the demonstration starts, as still as a thing of
+    its colour: the search cannot tell it, but the track that leaves that place, followed
+    backwards, leads to it. ``seed``: the region's points (left optical frame) of the first
+    valid frames, earliest first."""
     tracker.restart()
     for point in reversed(seed):
         tracker.region.observe(point)
