@@ -59,15 +59,17 @@ class StaticBackground:
         full_u, full_v = cv2.convertMaps(undistorter.map_xy, undistorter.map_fraction,
                                          cv2.CV_32FC1)
         grid_x, grid_y = np.meshgrid(xs, ys)
-        self.map_u = cv2.remap(full_u, grid_x, grid_y, cv2.INTER_LINEAR,
-                               borderMode=cv2.BORDER_CONSTANT, borderValue=-1e4)
-        self.map_v = cv2.remap(full_v, grid_x, grid_y, cv2.INTER_LINEAR,
-                               borderMode=cv2.BORDER_CONSTANT, borderValue=-1e4)
+        map_u = cv2.remap(full_u, grid_x, grid_y, cv2.INTER_LINEAR,
+                          borderMode=cv2.BORDER_CONSTANT, borderValue=-1e4)
+        map_v = cv2.remap(full_v, grid_x, grid_y, cv2.INTER_LINEAR,
+                          borderMode=cv2.BORDER_CONSTANT, borderValue=-1e4)
+        # fixed-point maps, as the undistorter's: resampling is 3x faster than with float maps
+        self._map_xy, self._map_fraction = cv2.convertMaps(map_u, map_v, cv2.CV_16SC2)
         shape = (self.size[1], self.size[0])
         # background pixels that see the frame at all (a wide-angle canvas has empty corners)
         frame_width, frame_height = undistorter.frame_size
-        self.in_frame = ((self.map_u >= 0) & (self.map_v >= 0) & (self.map_u <= frame_width - 1)
-                         & (self.map_v <= frame_height - 1))
+        self.in_frame = ((map_u >= 0) & (map_v >= 0) & (map_u <= frame_width - 1)
+                         & (map_v <= frame_height - 1))
         self._steps = (step * self.in_frame).astype(np.float32)  # per update and pixel
         self.image = np.zeros(shape + (3,), np.float32)  # median appearance, BGR
         self.coloured = np.zeros(shape, bool)  # the median is of the sponge's colour
@@ -78,7 +80,7 @@ class StaticBackground:
 
     def canvas_image(self, frame: np.ndarray) -> np.ndarray:
         """A full-resolution frame (BGR uint8) resampled into the background's pixels."""
-        return cv2.remap(frame, self.map_u, self.map_v, cv2.INTER_LINEAR,
+        return cv2.remap(frame, self._map_xy, self._map_fraction, cv2.INTER_LINEAR,
                          borderMode=cv2.BORDER_CONSTANT)
 
     def initialise(self, images: np.ndarray, positive: np.ndarray) -> None:
