@@ -119,6 +119,21 @@ class Demo:
     up: np.ndarray | None = None
 
 
+@dataclass
+class Row:
+    """One scene's line of the table."""
+
+    kind: str                 # "held out", "dev" or "synth"
+    demo: Demo
+    ours: Score
+    pairs: float              # stereo pairs per second, whole command
+    lost: float               # ... of the tracking pass over the frames where it was lost
+    learn_error: float        # % off the demonstrated tempo, learn on the track
+    base: Score               # CamShift + triangulation
+    fitted_offline: bool      # learn's online learner never locked on the track
+    truth_fit_error: float    # % off the demonstrated tempo, an offline fit of truth.csv
+
+
 def held_out_demo(workdir: Path, index: int, duration: float) -> Demo:
     """Render (once) held-out scene ``index`` and load its truth."""
     seed = HELD_OUT_SEEDS_FROM + index
@@ -130,7 +145,8 @@ def held_out_demo(workdir: Path, index: int, duration: float) -> Demo:
     scene = json.loads((path / "scene.json").read_text())
     return _load(path, f"{seed} {pattern} {frequency:g}Hz", scene["sponge"]["colour"],
                  np.array(scene["cameras"]["T_world_left"]), scene.get("summary", {}),
-                 scene["motion"]["frequency_hz"], person_xy=(scene["person"]["x"], scene["person"]["y"]))
+                 scene["motion"]["frequency_hz"],
+                 person_xy=(scene["person"]["x"], scene["person"]["y"]))
 
 
 def dev_demo(workdir: Path, seed: int, duration: float) -> Demo:
@@ -145,7 +161,8 @@ def dev_demo(workdir: Path, seed: int, duration: float) -> Demo:
     summary = scene.get("summary", {})
     return _load(path, f"dev {seed} {summary.get('pattern')}", scene["sponge"]["colour"],
                  np.array(scene["cameras"]["T_world_left"]), summary,
-                 scene["motion"]["frequency_hz"], person_xy=(scene["person"]["x"], scene["person"]["y"]))
+                 scene["motion"]["frequency_hz"],
+                 person_xy=(scene["person"]["x"], scene["person"]["y"]))
 
 
 def synth_demo(workdir: Path, pattern: str, frequency_hz: float, seed: int,
@@ -329,7 +346,8 @@ def main() -> None:
         learn_error, truth_fit_error, offline = learned_frequency_error(demo, out / "track.csv",
                                                                         args.workdir)
         base = run_baseline(demo)
-        rows.append((kind, demo, ours, pairs, lost, learn_error, base, offline, truth_fit_error))
+        rows.append(Row(kind, demo, ours, pairs, lost, learn_error, base, offline,
+                        truth_fit_error))
         print(f"{demo.name:<28} | {ours.shape_mm:9.2f}mm {ours.p95_mm:5.1f} {ours.bias_mm:5.1f} "
               f"{ours.raw_mm:6.1f} {ours.invalid_visible_pct:5.2f} {ours.hidden_valid:3d} "
               f"{ours.regain_s:5.2f}s {pairs:7.0f} {lost:5.0f} {learn_error:6.2f}"
@@ -338,37 +356,40 @@ def main() -> None:
               f"{base.hidden_valid:4d}", flush=True)
     print("-" * len(header))
     for kind in ("held out", "dev", "synth"):
-        summary(kind, [r for r in rows if r[0] == kind])
-    worst_factors([r for r in rows if r[0] == "held out"])
-    bias_directions([r for r in rows if r[0] == "held out"])
+        summary(kind, [r for r in rows if r.kind == kind])
+    worst_factors([r for r in rows if r.kind == "held out"])
+    bias_directions([r for r in rows if r.kind == "held out"])
 
 
-def summary(kind: str, rows: list) -> None:
+def summary(kind: str, rows: list[Row]) -> None:
     if not rows:
         return
-    ours = [r[2] for r in rows]
+    ours = [r.ours for r in rows]
     shape = np.array([s.shape_mm for s in ours])
-    worst = rows[int(np.nanargmax(shape))][1].name
+    worst = rows[int(np.nanargmax(shape))].demo.name
     values = {
         "shape_median": np.nanmedian(shape), "shape_worst": np.nanmax(shape),
         "bias": max(s.bias_mm for s in ours),
         "invalid": max(s.invalid_visible_pct for s in ours),
-        "regain": max(s.regain_s for s in ours), "learn": max(r[5] for r in rows),
-        "pairs": min(r[3] for r in rows)}
-    base = [r[6] for r in rows]
+        "regain": max(s.regain_s for s in ours), "learn": max(r.learn_error for r in rows),
+        "pairs": min(r.pairs for r in rows)}
+    base = [r.base for r in rows]
     print(f"{kind} ({len(rows)} scenes): shape RMS median {values['shape_median']:.2f} mm, "
           f"worst {values['shape_worst']:.2f} mm ({worst}); bias worst {values['bias']:.1f} mm; "
           f"invalid visible worst {values['invalid']:.2f} %; valid in full occlusion "
           f"{sum(s.hidden_valid for s in ours)}; regain worst {values['regain']:.2f} s; "
-          f"learn worst {values['learn']:.2f} % ({sum(r[7] for r in rows)} fitted offline); "
+          f"learn worst {values['learn']:.2f} % "
+          f"({sum(r.fitted_offline for r in rows)} fitted offline); "
           f"pairs/s worst {values['pairs']:.0f}, median "
-          f"{np.median([r[3] for r in rows]):.0f}; lost worst {np.nanmin([r[4] for r in rows]):.0f}")
+          f"{np.median([r.pairs for r in rows]):.0f}; "
+          f"lost worst {np.nanmin([r.lost for r in rows]):.0f}")
     if kind == "synth":
         print(f"  synth raw RMS (box centre) mean {np.mean([s.raw_mm for s in ours]):.2f} mm")
-    learnt = [r[5] for r in rows]
+    learnt = [r.learn_error for r in rows]
     print(f"  learn within 1 % of the demonstrated tempo: {sum(e <= 1.0 for e in learnt)} of "
           f"{len(rows)}; an offline fit of truth.csv is off it by median "
-          f"{np.median([r[8] for r in rows]):.2f} %, worst {max(r[8] for r in rows):.2f} %")
+          f"{np.median([r.truth_fit_error for r in rows]):.2f} %, "
+          f"worst {max(r.truth_fit_error for r in rows):.2f} %")
     print(f"  CamShift: shape RMS median {np.nanmedian([s.shape_mm for s in base]):.1f} mm, "
           f"bias worst {max(s.bias_mm for s in base):.1f} mm, invalid visible worst "
           f"{max(s.invalid_visible_pct for s in base):.1f} %, valid in full occlusion "
@@ -380,25 +401,26 @@ def summary(kind: str, rows: list) -> None:
                                         for name, ok in met.items()))
 
 
-def worst_factors(rows: list) -> None:
+def worst_factors(rows: list[Row]) -> None:
     """The factors of the three worst held-out scenes by shape RMS, and the factors the
     shape error goes with across all of them."""
     if not rows:
         return
-    rows = sorted(rows, key=lambda r: -np.nan_to_num(r[2].shape_mm, nan=1e9))
+    rows = sorted(rows, key=lambda r: -np.nan_to_num(r.ours.shape_mm, nan=1e9))
     print("worst held-out scenes and their factors:")
     keys = ("colour", "pad", "table_texture", "table_near_hue", "same_colour_distractors",
             "same_colour_on_wiping_area", "image_size", "k1", "baseline_m", "distance_m",
             "elevation_deg", "codec", "exposure_s", "noise_grey", "sleeve", "sponge_length_m")
-    for kind, demo, ours, *_ in rows[:3]:
+    for row in rows[:3]:
+        demo, ours = row.demo, row.ours
         factors = ", ".join(f"{k}={demo.factors.get(k)}" for k in keys if k in demo.factors)
         print(f"  {demo.name}: shape {ours.shape_mm:.2f} mm, invalid {ours.invalid_visible_pct:.2f} %"
               f" | {factors}")
-    shape = np.array([r[2].shape_mm for r in rows])
+    shape = np.array([r.ours.shape_mm for r in rows])
     print("shape RMS against numeric factors (Spearman rank correlation over the held-out set):")
     for key in ("k1", "baseline_m", "distance_m", "elevation_deg", "exposure_s", "noise_grey",
                 "sponge_length_m", "frequency_hz"):
-        values = np.array([float(r[1].factors.get(key, np.nan)) for r in rows])
+        values = np.array([float(r.demo.factors.get(key, np.nan)) for r in rows])
         ok = np.isfinite(values) & np.isfinite(shape)
         if ok.sum() > 3:
             rank = lambda v: np.argsort(np.argsort(v))  # noqa: E731
@@ -407,20 +429,21 @@ def worst_factors(rows: list) -> None:
     for key in ("codec", "pad", "table_texture", "colour"):
         groups: dict[str, list[float]] = {}
         for r in rows:
-            groups.setdefault(str(r[1].factors.get(key)), []).append(r[2].shape_mm)
+            groups.setdefault(str(r.demo.factors.get(key)), []).append(r.ours.shape_mm)
         print(f"  {key}: " + ", ".join(f"{g} {np.nanmean(v):.2f} mm (n={len(v)})"
                                        for g, v in sorted(groups.items())))
 
 
-def bias_directions(rows: list) -> None:
+def bias_directions(rows: list[Row]) -> None:
     """The bias of each held-out scene tracked right (shape RMS <= 10 mm) in the directions
     that explain it: away from the person (the holding hand covers the sponge's rear, so the
     visible part's centre lies ahead of the sponge's), across, and up."""
-    rows = [r for r in rows if r[1].away is not None and r[2].shape_mm <= 10.0]
+    rows = [r for r in rows if r.demo.away is not None and r.ours.shape_mm <= 10.0]
     if not rows:
         return
     parts = []
-    for _, demo, ours, *_ in rows:
+    for row in rows:
+        demo, ours = row.demo, row.ours
         across = np.cross(demo.up, demo.away)
         parts.append([ours.bias_xyz @ demo.away, ours.bias_xyz @ across, ours.bias_xyz @ demo.up])
     parts = np.array(parts) * 1000.0
