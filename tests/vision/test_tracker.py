@@ -1,8 +1,6 @@
 """The sponge tracker on a short synthetic demonstration: region and box estimates,
 occlusion, frames and colour sources, and the box refinement's scoring windows."""
 
-import subprocess
-import sys
 from dataclasses import replace
 
 import numpy as np
@@ -170,19 +168,3 @@ def test_yaw_before_any_plane_is_measured_in_the_tracking_frame(calibration):
     assert abs(tracker._yaw(along_y_of_track)) == pytest.approx(np.pi / 2, abs=1e-9)
 
 
-def test_prepare_loads_the_compiled_plane_fit_before_any_frame():
-    """A live session calls prepare() before its clock starts: in a fresh process the plane
-    fit's compiled kernel is then loaded, so that the first frame after finding the sponge
-    does not wait ~0.3 s for numba."""
-    script = (
-        "from wipelab.vision.synthetic_rig import armar_wide_stereo_calibration\n"
-        "from wipelab.vision.colour_model import ColourSource\n"
-        "from wipelab.vision.tracker import SpongeTracker\n"
-        "from wipelab.vision import table_plane\n"
-        "tracker = SpongeTracker(armar_wide_stereo_calibration(), ColourSource(name='yellow'))\n"
-        "before = len(table_plane._gauss_newton_on_plane.signatures)\n"
-        "tracker.prepare()\n"
-        "print(before, len(table_plane._gauss_newton_on_plane.signatures))\n")
-    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                            check=True)
-    assert result.stdout.split() == ["0", "1"]

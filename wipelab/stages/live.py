@@ -151,7 +151,6 @@ class _Session:
     # -- imitation: one frame at a time -----------------------------------------------------
     def run(self, source: LiveSource) -> None:
         feed, imitation = self.feed, self.imitation
-        self.tracker.prepare()
         feed.start()
         self.clock = SessionClock(self.params.realtime, feed.start_time)
         with tqdm(desc="live: imitating", unit="frame", disable=self.quiet, file=sys.stderr,

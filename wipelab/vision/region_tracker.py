@@ -314,14 +314,6 @@ class RegionTracker:
         most (twice its area: it may have dwelt a little here and there)."""
         return 2.0 * (self.size * view.focal / max(view.depth(point), 1e-3)) ** 2
 
-    def prepare(self) -> None:
-        """Load the compiled plane fit now: numba's first call in a process takes ~0.3 s,
-        which a live session spends before its clock starts rather than on the first frame
-        after the sponge is found."""
-        level = Plane(np.array([0.0, 0.0, 1.0]), 1.0)
-        cameras = [(view.R, view.t, view.focal) for view in self.views]
-        points_on_plane(level, [np.array([[0.0, 0.0, 1.0]])] * 2, cameras)
-
     def observe(self, point: np.ndarray) -> None:
         """Take this frame's sponge point (3,), left optical frame, from elsewhere (the box
         refinement) instead of measuring it: keeps the prediction going."""

@@ -155,11 +155,6 @@ class SpongeTracker:
             region.params.acquisition, min_periodicity=0.0))
         region.candidates.params = region.params.acquisition
 
-    def prepare(self) -> None:
-        """Load the compiled kernels the first frames after finding the sponge need (a
-        live session calls this before its clock starts)."""
-        self.region.prepare()
-
     def restart(self) -> None:
         """Forget the track, keep what was learnt (for a second pass from the video's start)."""
         self.region.restart()
