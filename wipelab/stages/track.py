@@ -52,7 +52,6 @@ from wipelab.trajectory_csv import write_trajectory
 from wipelab.vision.calibration import StereoCalibration, load_calibration
 from wipelab.vision.colour_model import NAMED_COLOURS, ColourSource, parse_hsv_range
 from wipelab.vision.demonstration_area import DemonstrationArea, measure_demonstration_area
-from wipelab.sim.kinematics import rotation_about_axis
 from wipelab.vision.projection import invert_transform
 from wipelab.vision.sponge_box import CORNER_SIGNS, EDGES, SpongeBox, yaw_rotation
 from wipelab.vision.tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_MONO, QUALITY_NONE,
@@ -513,7 +512,7 @@ def track_blueprint(scene: TrackScene, area: DemonstrationArea, height: float) -
     up = scene.R_track_table[:, 2]
     # from the cameras' side, turned 40 degrees about the table normal: the cameras at the
     # edge of the view, the demonstration in the middle
-    side = rotation_about_axis(up, np.radians(40.0)) @ (cameras - centre)
+    side = cv2.Rodrigues(np.radians(40.0) * up)[0] @ (cameras - centre)
     eye = rrb.EyeControls3D(position=centre + 1.5 * side, look_target=centre + 0.3 * (cameras - centre),
                             eye_up=up)
     growing = rrb.VisibleTimeRanges(timeline="time", start=rrb.TimeRangeBoundary.infinite(),

@@ -26,7 +26,6 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from wipelab.vision.box_tracker import BoxParams, BoxTracker
 from wipelab.vision.calibration import StereoCalibration
 from wipelab.vision.colour_model import ColourSource, LinearColourFeature
 from wipelab.vision.projection import invert_transform, transform_points
@@ -125,6 +124,8 @@ class SpongeTracker:
         self.region = RegionTracker(calibration, colour, region)
         self.box = None
         if params.sponge is not None:
+            # imported here: its compiled kernels (numba, 0.2 s to import) serve a known box only
+            from wipelab.vision.box_tracker import BoxParams, BoxTracker
             self.box = BoxTracker(calibration, BoxParams(particles=params.particles,
                                                          seed=params.seed,
                                                          sponge=params.sponge))
