@@ -88,7 +88,8 @@ def test_joint_velocity_gives_the_tcp_velocity(arm, posture):
 
 def test_orientation_weight_turns_the_hand_to_a_target(posture):
     from wipelab.sim.ik import IKParams
-    from wipelab.sim.kinematics import rotation_about_axis, rotation_error
+    from wipelab.rotations import rotation_about_axis
+    from wipelab.sim.kinematics import rotation_error
 
     arm = RightArm(BasePose().joint_values(), IKParams(orientation_weight=0.3))
     tracker = arm.tracker(posture)

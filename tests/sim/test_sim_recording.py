@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from wipelab.logs import StageRecorder, read_mcap_topic, rrd_column
-from wipelab.sim.kinematics import quaternions_xyzw_from_rotations, rotation_from_quaternion_xyzw
+from wipelab.rotations import quaternions_xyzw_from_rotations, rotation_from_quaternion_xyzw
 
 T = np.array([0.0, 0.05, 0.1, 0.15])
 RNG = np.random.default_rng(5)

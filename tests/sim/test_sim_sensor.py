@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from wipelab.sim.ft_sensor import GRAVITY, contact_wrench, identify_payload
-from wipelab.sim.kinematics import rotation_about_axis
+from wipelab.rotations import rotation_about_axis
 from wipelab.sim.surfaces import flat_surface
 from wipelab.sim.task import TaskOptions, build_task
 from wipelab.sim.path import place_model

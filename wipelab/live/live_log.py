@@ -40,7 +40,7 @@ from wipelab.logs import StageRecorder, stage_panels, whole_run
 from wipelab.logs.palette import INPUT_COLOUR, LEARNED_COLOUR, REFERENCE_COLOUR, segment_colour
 from wipelab.live.log_worker import LogWorker
 from wipelab.logs.video_encoder import LiveVideoEncoder
-from wipelab.sim.kinematics import quaternion_xyzw_from_rotation
+from wipelab.rotations import quaternion_xyzw_from_rotation
 from wipelab.sim.recording import log_scene, log_trace
 from wipelab.stages.track import (AREA_COLOUR, LEFT_FRAME, LOST, QUALITY_COLOURS, RIGHT_FRAME,
                                   TrackScene, log_track_frames, log_track_setup)

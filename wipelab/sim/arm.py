@@ -25,7 +25,8 @@ import numpy as np
 from wipelab.sim.armar3 import (RIGHT_ARM_JOINTS, TORSO_JOINTS, Box, Sphere,
                                 armar3b_description, armar3b_urdf_path)
 from wipelab.sim.ik import ArmIK, IKParams
-from wipelab.sim.kinematics import KinematicChain, parse_urdf_joints, rotation_from_rpy
+from wipelab.rotations import rotation_from_rpy
+from wipelab.sim.kinematics import KinematicChain, parse_urdf_joints
 
 #: A comfortable right-arm posture to start the posture search from (rad): elbow bent,
 #: forearm rolled so that the palm faces the midline.

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wipelab.sim.kinematics import rotations_from_quaternions_xyzw
+from wipelab.rotations import rotations_from_quaternions_xyzw
 from wipelab.sim.sponge import bottom_points
 
 #: Contact threshold (N).

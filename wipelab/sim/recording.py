@@ -59,9 +59,9 @@ from wipelab.logs.palette import (INPUT_COLOUR, LEARNED_COLOUR, REFERENCE_COLOUR
                                   speed_colours)
 from wipelab.logs.phase_chart import PhaseChart
 from wipelab.sim.armar3 import PLATFORM_SIZE, RIGHT_ARM_JOINTS, TORSO_JOINTS, armar3b_urdf_path
-from wipelab.sim.kinematics import (parse_urdf_joints, quaternion_xyzw_from_rotation,
-                                    quaternions_xyzw_from_rotations,
-                                    rotations_from_quaternions_xyzw)
+from wipelab.rotations import (quaternion_xyzw_from_rotation, quaternions_xyzw_from_rotations,
+                               rotations_from_quaternions_xyzw)
+from wipelab.sim.kinematics import parse_urdf_joints
 from wipelab.sim.path import PATH_PHASES, dof_waveform
 from wipelab.sim.sponge import bottom_points
 from wipelab.sim.urdf_visuals import urdf_visuals

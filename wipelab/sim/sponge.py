@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wipelab.sim.kinematics import rotation_about_axis
+from wipelab.rotations import rotation_about_axis
 
 #: Accepted sponge stiffness range (N/m): a kitchen sponge.
 STIFFNESS_RANGE = (500.0, 2000.0)

@@ -13,7 +13,8 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from wipelab.sim.kinematics import parse_urdf_joints, rpy_from_rotation
+from wipelab.rotations import rpy_from_rotation
+from wipelab.sim.kinematics import parse_urdf_joints
 
 
 def _fmt(values) -> str:

@@ -13,7 +13,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from wipelab.sim.kinematics import quaternion_xyzw_from_rotation, rotation_from_rpy
+from wipelab.rotations import quaternion_xyzw_from_rotation, rotation_from_rpy
 
 #: Colour of a visual without a material colour (RGBA, 0..1).
 DEFAULT_RGBA = (0.7, 0.7, 0.7, 1.0)

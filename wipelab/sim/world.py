@@ -36,8 +36,8 @@ from wipelab.sim.armar3 import (PLATFORM_JOINTS, RIGHT_ARM_JOINTS, TCP_OFFSET, T
                                 armar3b_urdf_path)
 from wipelab.sim.bullet import pybullet
 from wipelab.sim.ft_sensor import FTSensorParams, SensorImperfections
-from wipelab.sim.kinematics import (link_pose, parse_urdf_joints,
-                                    quaternion_xyzw_from_rotation, rotation_from_quaternion_xyzw)
+from wipelab.rotations import quaternion_xyzw_from_rotation, rotation_from_quaternion_xyzw
+from wipelab.sim.kinematics import link_pose, parse_urdf_joints
 from wipelab.sim.sponge import Grasp, SpongeParams, collision_spheres, tcp_to_sponge
 from wipelab.sim.surfaces import Surface
 from wipelab.sim.urdf_edit import attach_compliant_box, drop_subtrees, freeze_joints, subtree

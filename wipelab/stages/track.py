@@ -47,6 +47,7 @@ from wipelab.logs.palette import XYZ_COLOURS
 from wipelab.logs.timebase import seconds_array_to_ns
 from wipelab.long_lived import long_lived_objects
 from wipelab.manifest import build_manifest, write_json
+from wipelab.rotations import quaternion_xyzw_from_rotation, quaternions_xyzw_from_rotations
 from wipelab.stage_output import staged_output
 from wipelab.trajectory_csv import write_trajectory
 from wipelab.vision.calibration import StereoCalibration, load_calibration
@@ -541,22 +542,6 @@ def track_blueprint(scene: TrackScene, area: DemonstrationArea, height: float) -
         *stage_panels())
 
 
-def _quaternion_xyzw(R: np.ndarray) -> np.ndarray:
-    """Unit quaternion (x, y, z, w) of a rotation matrix (3, 3)."""
-    return _quaternions_xyzw(R[None])[0]
-
-
-def _quaternions_xyzw(R: np.ndarray) -> np.ndarray:
-    """Unit quaternions (n, 4) (x, y, z, w) of rotation matrices (n, 3, 3)."""
-    R00, R11, R22 = R[:, 0, 0], R[:, 1, 1], R[:, 2, 2]
-    w = np.sqrt(np.maximum(0.0, 1.0 + R00 + R11 + R22)) / 2.0
-    x = np.copysign(np.sqrt(np.maximum(0.0, 1.0 + R00 - R11 - R22)) / 2.0, R[:, 2, 1] - R[:, 1, 2])
-    y = np.copysign(np.sqrt(np.maximum(0.0, 1.0 - R00 + R11 - R22)) / 2.0, R[:, 0, 2] - R[:, 2, 0])
-    z = np.copysign(np.sqrt(np.maximum(0.0, 1.0 - R00 - R11 + R22)) / 2.0, R[:, 1, 0] - R[:, 0, 1])
-    q = np.stack([x, y, z, w], axis=1)
-    return q / np.linalg.norm(q, axis=1, keepdims=True)
-
-
 #: Widest video written for the logs when the demo's own videos cannot be logged as they are
 #: (1280x720 -> 426x240, 960x540 -> 480x270: about half the pixels, and of the scaling and
 #: encoding time, of 640 wide, whose previews took a quarter of the CPU time of tracking a
@@ -658,10 +643,11 @@ def log_track_setup(rec: StageRecorder, scene: TrackScene) -> None:
     width, height = calibration.image_size
     T_track_left = calibration.T_track_left
     T_track_right = T_track_left @ invert_transform(calibration.right.T_cam_ref)
-    tf = [(scene.frame, RIGHT_FRAME, T_track_right[:3, 3], _quaternion_xyzw(T_track_right[:3, :3]))]
+    tf = [(scene.frame, RIGHT_FRAME, T_track_right[:3, 3],
+           quaternion_xyzw_from_rotation(T_track_right[:3, :3]))]
     if scene.frame != LEFT_FRAME:   # the world (of the demo) with the cameras in it
         tf.insert(0, (scene.frame, LEFT_FRAME, T_track_left[:3, 3],
-                      _quaternion_xyzw(T_track_left[:3, :3])))
+                      quaternion_xyzw_from_rotation(T_track_left[:3, :3])))
     rec.transforms(0.0, tf)
     for side, K, D, frame_id in (("left", calibration.K1, calibration.D1, LEFT_FRAME),
                                  ("right", calibration.K2, calibration.D2, RIGHT_FRAME)):
@@ -701,8 +687,9 @@ def log_track_frames(rec: StageRecorder, scene: TrackScene, index: np.ndarray, t
     with rec.in_time_order():   # in the MCAP frame by frame, as they are shown
         rec.points3d_series("/track/particles", t[drawn], particles[finite], counts[drawn],
                             colors=PARTICLE_COLOUR, radii=0.0015, frame_id=scene.frame)
+        rotations = scene.sponge_rotations(poses[:, 3])
         rec.box3d_series("/track/sponge", t, sizes, positions,
-                         _quaternions_xyzw(scene.sponge_rotations(poses[:, 3])), colours,
+                         quaternions_xyzw_from_rotations(rotations), colours,
                          frame_id=scene.frame)
         rec.line_strip3d_series("/track/trajectory", t[piece],
                                 np.stack([before[piece], positions[piece]], axis=1),
