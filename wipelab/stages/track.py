@@ -47,7 +47,8 @@ from wipelab.logs.palette import XYZ_COLOURS
 from wipelab.logs.timebase import seconds_array_to_ns
 from wipelab.long_lived import long_lived_objects
 from wipelab.manifest import build_manifest, write_json
-from wipelab.rotations import quaternion_xyzw_from_rotation, quaternions_xyzw_from_rotations
+from wipelab.rotations import (quaternion_xyzw_from_rotation, quaternions_xyzw_from_rotations,
+                               rotation_about_axis)
 from wipelab.stage_output import staged_output
 from wipelab.trajectory_csv import write_trajectory
 from wipelab.vision.calibration import StereoCalibration, load_calibration
@@ -513,7 +514,7 @@ def track_blueprint(scene: TrackScene, area: DemonstrationArea, height: float) -
     up = scene.R_track_table[:, 2]
     # from the cameras' side, turned 40 degrees about the table normal: the cameras at the
     # edge of the view, the demonstration in the middle
-    side = cv2.Rodrigues(np.radians(40.0) * up)[0] @ (cameras - centre)
+    side = rotation_about_axis(up, np.radians(40.0)) @ (cameras - centre)
     eye = rrb.EyeControls3D(position=centre + 1.5 * side, look_target=centre + 0.3 * (cameras - centre),
                             eye_up=up)
     growing = rrb.VisibleTimeRanges(timeline="time", start=rrb.TimeRangeBoundary.infinite(),
