@@ -18,6 +18,7 @@ for points X on the plane; ``normal`` is unit length and points towards the came
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -190,7 +191,7 @@ def points_on_plane(plane: Plane, rays: list[np.ndarray], cameras: list[tuple[np
     per_camera = [np.asarray(r, np.float64).tolist() for r in rays]
     points = np.full((len(per_camera[0]), 3), np.nan)
     for i, measured in enumerate(zip(*per_camera)):
-        seen = [(view, ray) for view, ray in zip(views, measured) if np.isfinite(ray[0])]
+        seen = [(view, ray) for view, ray in zip(views, measured) if math.isfinite(ray[0])]
         start, count = [0.0, 0.0, 0.0], 0
         for (R, _, _, eye, _, _), ray in seen:
             direction = _rotate_back(R, ray)
