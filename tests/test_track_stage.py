@@ -165,10 +165,12 @@ def test_bad_input_is_one_line_exit_2_and_nothing_written(demo, tmp_path, breaka
     assert not out.exists()
 
 
-def test_the_track_command_does_not_load_the_simulator():
-    script = ("import sys, wipelab.cli, wipelab.stages.track\n"
-              "print(sorted(m for m in ('pybullet', 'wipelab.sim.world', 'wipelab.learning')"
-              " if m in sys.modules))\n"
+def test_the_track_command_does_not_load_the_simulator_or_numba():
+    """Without a known sponge box nothing of the track command needs a compiled kernel:
+    numba's import (~0.2 s) and kernel loading (~0.6 s) stay out of every run."""
+    script = ("import sys, wipelab.cli, wipelab.stages.track, wipelab.vision.tracker\n"
+              "print(sorted(m for m in ('pybullet', 'wipelab.sim.world', 'wipelab.learning',"
+              " 'numba') if m in sys.modules))\n"
               "from wipelab.sim import SimWorld, build_task, load_surface\n"
               "print(SimWorld.__module__, build_task.__module__, load_surface.__module__)\n")
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
