@@ -30,7 +30,10 @@ Per scene
   gappy for the online learner to lock onto, which learn then fits offline;
 * speed: stereo frame pairs per second of the whole ``wipelab track`` command (decoding,
   the two tracking passes and writing the logs), and of the tracking pass alone over the
-  frames in which the sponge was lost (decoding included).
+  frames in which the sponge was lost (decoding included); the command's CPU time (all its
+  threads: tracker, decoders, preview encoder) per frame pair, which says whether a faster
+  run needs less work or more parallel work (on 2 cores, 2 x 1000 / pairs/s ms is all there
+  is).
 
 The same videos go through the baseline (OpenCV CamShift per camera, the two window centres
 triangulated). At the end: medians and worst cases against the targets, the factors of
@@ -52,6 +55,7 @@ import argparse
 import contextlib
 import io
 import json
+import resource
 import os
 import shutil
 import subprocess
@@ -127,6 +131,7 @@ class Row:
     demo: Demo
     ours: Score
     pairs: float              # stereo pairs per second, whole command
+    cpu_ms: float             # CPU time of the whole command (all threads) per pair, ms
     lost: float               # ... of the tracking pass over the frames where it was lost
     learn_error: float        # % off the demonstrated tempo, learn on the track
     base: Score               # CamShift + triangulation
@@ -240,23 +245,26 @@ def regain_time(demo: Demo, valid: np.ndarray) -> float:
     return longest
 
 
-def run_command(demo: Demo, out: Path) -> tuple[float, np.ndarray, np.ndarray]:
-    """The whole ``wipelab track`` command: (pairs/s, points (n, 3), valid (n,))."""
+def run_command(demo: Demo, out: Path) -> tuple[float, float, np.ndarray, np.ndarray]:
+    """The whole ``wipelab track`` command: (pairs/s, CPU ms per pair, points (n, 3),
+    valid (n,))."""
     shutil.rmtree(out, ignore_errors=True)  # a failed run must not leave an older track.csv
     command = [sys.executable, "-m", "wipelab", "track", str(demo.path), "-o", str(out), "-q"]
     if not (demo.path / "demo.toml").is_file():
         command += ["--color", demo.colour]
-    start = time.perf_counter()
+    start, before = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
     result = subprocess.run(command, capture_output=True, text=True)
-    elapsed = time.perf_counter() - start
+    elapsed, after = time.perf_counter() - start, resource.getrusage(resource.RUSAGE_CHILDREN)
     n = len(demo.truth)
+    cpu_ms = 1000.0 * (after.ru_utime + after.ru_stime - before.ru_utime
+                       - before.ru_stime) / n
     if result.returncode != 0:  # a scene the command gives up on: every frame invalid
         lines = result.stderr.strip().splitlines() or ["(no message)"]
         print(f"  {demo.name}: wipelab track exited with {result.returncode}: {lines[-1]}")
-        return n / elapsed, np.full((n, 3), np.nan), np.zeros(n, bool)
+        return n / elapsed, cpu_ms, np.full((n, 3), np.nan), np.zeros(n, bool)
     track = read_trajectory(out / "track.csv", required=("t", "x", "y", "z"))
     points = track.array(["x", "y", "z"])
-    return len(track.t) / elapsed, points, track.valid
+    return len(track.t) / elapsed, cpu_ms, points, track.valid
 
 
 def lost_throughput(demo: Demo) -> float:
@@ -331,26 +339,27 @@ def main() -> None:
               for p in PATTERNS for f in SYNTH_FREQUENCIES_HZ for s in range(args.synth_seeds)]
     print(f"load average at start: {' '.join(f'{v:.1f}' for v in os.getloadavg())} on "
           f"{os.cpu_count()} cores; pairs/s is the whole `wipelab track` command (decoding, "
-          "both passes, logs); 'lost' the tracking pass over frames where the sponge was lost")
+          "both passes, logs); 'cpu' its CPU time (all threads) per pair, ms; 'lost' the "
+          "tracking pass over frames where the sponge was lost")
     header = (f"{'scene':<28} | {'ours: shape':>11} {'p95':>5} {'bias':>5} {'raw':>6} "
-              f"{'inv%':>5} {'hid':>3} {'regain':>6} {'pairs/s':>7} {'lost':>5} "
+              f"{'inv%':>5} {'hid':>3} {'regain':>6} {'pairs/s':>7} {'cpu':>4} {'lost':>5} "
               f"{'learn%':>6} | {'CamShift: shape':>15} {'bias':>6} {'inv%':>5} {'hid':>4}")
     print(header)
     print("-" * len(header))
     rows = []
     for kind, demo in demos:
         out = args.workdir / "out" / demo.path.name
-        pairs, points, valid = run_command(demo, out)
+        pairs, cpu_ms, points, valid = run_command(demo, out)
         ours = score(demo, points, valid)
         lost = lost_throughput(demo)
         learn_error, truth_fit_error, offline = learned_frequency_error(demo, out / "track.csv",
                                                                         args.workdir)
         base = run_baseline(demo)
-        rows.append(Row(kind, demo, ours, pairs, lost, learn_error, base, offline,
+        rows.append(Row(kind, demo, ours, pairs, cpu_ms, lost, learn_error, base, offline,
                         truth_fit_error))
         print(f"{demo.name:<28} | {ours.shape_mm:9.2f}mm {ours.p95_mm:5.1f} {ours.bias_mm:5.1f} "
               f"{ours.raw_mm:6.1f} {ours.invalid_visible_pct:5.2f} {ours.hidden_valid:3d} "
-              f"{ours.regain_s:5.2f}s {pairs:7.0f} {lost:5.0f} {learn_error:6.2f}"
+              f"{ours.regain_s:5.2f}s {pairs:7.0f} {cpu_ms:4.1f} {lost:5.0f} {learn_error:6.2f}"
               f"{'*' if offline else ' '}| "
               f"{base.shape_mm:13.1f}mm {base.bias_mm:6.1f} {base.invalid_visible_pct:5.1f} "
               f"{base.hidden_valid:4d}", flush=True)
@@ -383,6 +392,11 @@ def summary(kind: str, rows: list[Row]) -> None:
           f"pairs/s worst {values['pairs']:.0f}, median "
           f"{np.median([r.pairs for r in rows]):.0f}; "
           f"lost worst {np.nanmin([r.lost for r in rows]):.0f}")
+    cpu = np.median([r.cpu_ms for r in rows])
+    busy = np.median([r.cpu_ms * r.pairs / 1000.0 for r in rows])
+    print(f"  CPU per pair (all threads) median {cpu:.1f} ms, {busy:.2f} of "
+          f"{os.cpu_count()} cores busy: {os.cpu_count() * 1000.0 / cpu:.0f} pairs/s at most "
+          "with every core kept busy")
     if kind == "synth":
         print(f"  synth raw RMS (box centre) mean {np.mean([s.raw_mm for s in ours]):.2f} mm")
     learnt = [r.learn_error for r in rows]
