@@ -12,6 +12,7 @@ from click.testing import CliRunner
 
 from wipelab.cli import cli
 from wipelab.logs import mcap_attachments, mcap_topics, read_mcap_scalars, rrd_column
+from wipelab.stages import track as track_stage
 from wipelab.stages.track import LogVideos, open_demo
 from wipelab.trajectory_csv import read_trajectory
 from wipelab.vision.calibration import load_calibration
@@ -114,6 +115,22 @@ def test_any_opencv_readable_codec_is_tracked_and_logged_as_h264(demo, tmp_path)
     assert track.valid.sum() > 30
     topics = mcap_topics(tmp_path / "out" / "track.mcap")
     assert topics["/stereo/right/video"]["message_count"] == len(track.t)
+
+
+def test_a_playable_video_is_logged_as_it_is_unless_it_is_heavy(demo, tmp_path, monkeypatch):
+    """The synth demo's H.264 (no B-frames, a few hundred kbit/s) goes into the logs as it
+    is; a video heavier than LOGGED_AS_IT_IS_MAX_BITRATE is logged as a preview: the logs of
+    a high-quality demo would otherwise be as large as its videos, twice."""
+    opened = open_demo(demo)
+    light = LogVideos(opened, tmp_path)
+    assert light.paths == [opened.left, opened.right] and light.scale == 1.0
+    monkeypatch.setattr(track_stage, "LOGGED_AS_IT_IS_MAX_BITRATE", 1e4)
+    heavy = LogVideos(opened, tmp_path)
+    try:
+        assert heavy.paths == [tmp_path / "left.mp4", tmp_path / "right.mp4"]
+        assert heavy.size == (320, 240) and heavy.scale == 0.5   # 640x480, at most 480 wide
+    finally:
+        heavy.close()
 
 
 def test_a_preview_that_cannot_be_encoded_fails_the_run(demo, tmp_path):

@@ -557,6 +557,11 @@ def track_blueprint(scene: TrackScene, area: DemonstrationArea, height: float) -
 #: encoding time, of 640 wide, whose previews took a quarter of the CPU time of tracking a
 #: 1280x720 H.264 demo with B-frames).
 PREVIEW_WIDTH = 480
+#: Heaviest demo video (bits per second) the logs hold as it is: each log (MCAP and RRD)
+#: would otherwise be about as large as the demo's videos, and take seconds to write (dev
+#: scene 31, 2 x 9 Mbit/s: 140 MB of logs and 10 % of the command's time), where its
+#: previews are a few MB, made beside the tracker.
+LOGGED_AS_IT_IS_MAX_BITRATE = 4e6
 #: Frame pairs waiting for the previews' encoder at most.
 PREVIEW_QUEUE = 8
 
@@ -571,11 +576,19 @@ def playable(path: Path) -> bool:
         return context.name in ("h264", "hevc", "av1") and not context.has_b_frames
 
 
+def loggable_as_it_is(path: Path, frames: int, fps: float) -> bool:
+    """Whether the logs hold a demo video as it is: :func:`playable`, and no heavier than
+    :data:`LOGGED_AS_IT_IS_MAX_BITRATE`."""
+    bitrate = 8.0 * Path(path).stat().st_size * fps / max(frames, 1)
+    return bitrate <= LOGGED_AS_IT_IS_MAX_BITRATE and playable(path)
+
+
 class LogVideos:
-    """The two videos the logs show: the demo's own when they can be played as they are,
-    else H.264 previews (at most :data:`PREVIEW_WIDTH` wide, fast x264 settings) written from
-    the frames of the tracking pass, so that nothing is decoded twice. The previews are
-    scaled and encoded on a thread of their own, beside the tracker.
+    """The two videos the logs show: the demo's own when they can be logged as they are
+    (:func:`loggable_as_it_is`), else H.264 previews (at most :data:`PREVIEW_WIDTH` wide,
+    fast x264 settings) written from the frames of the tracking pass, so that nothing is
+    decoded twice. The previews are scaled and encoded on a thread of their own, beside the
+    tracker.
 
     Parameters
     ----------
@@ -589,7 +602,8 @@ class LogVideos:
         self.paths = [demo.left, demo.right]
         self.scale = 1.0
         self._writers = []
-        if playable(demo.left) and playable(demo.right):
+        frames, fps = demo.reader.frame_count, demo.reader.fps
+        if all(loggable_as_it_is(path, frames, fps) for path in self.paths):
             return
         factor = max(1, int(np.ceil(width / PREVIEW_WIDTH)))
         self.scale = 1.0 / factor
