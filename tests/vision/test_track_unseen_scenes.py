@@ -14,7 +14,6 @@ from click.testing import CliRunner
 
 from tests.stereo_scenes import render_scene
 from wipelab.cli import cli
-from wipelab.stages import track as track_stage
 from wipelab.stages.track import TrackParams, open_demo, run_tracker, track_backwards
 from wipelab.trajectory_csv import read_trajectory
 from wipelab.vision.colour_model import ColourSource
@@ -117,31 +116,3 @@ def test_followed_backwards_from_a_later_frame_the_sponge_is_where_it_was(scenes
     forward = result.poses[valid, :3] - points[valid]
     assert np.linalg.norm(error.mean(axis=0) - forward.mean(axis=0)) < 0.005
     assert np.sqrt(np.mean(np.sum((error - forward.mean(axis=0)) ** 2, axis=1))) < 0.006
-
-
-def test_a_search_that_finds_no_periodic_motion_soon_takes_any_motion_without_reading_on(
-        scenes, monkeypatch):
-    """When nothing of the colour has moved periodically within PERIODIC_SEARCH_SECONDS, the
-    warm-up gives up the periodic search there (not at the video's end: on a long demo that
-    is a whole extra pass) and starts again taking any motion; the sponge is then found and
-    followed as well. The search is cut to half a second here, shorter than periodic motion
-    takes to show."""
-    points, seen, colour, _ = _truth(scenes[SEEDS[0]])
-    demo = open_demo(scenes[SEEDS[0]])
-    monkeypatch.setattr(track_stage, "PERIODIC_SEARCH_SECONDS", 0.5)
-    tracker = SpongeTracker(demo.calibration, ColourSource(name=colour))
-    steps, restarts = [0], []
-    step, restart = tracker.step, tracker.restart
-    monkeypatch.setattr(tracker, "step", lambda *frames: (steps.__setitem__(0, steps[0] + 1),
-                                                          step(*frames))[1])
-    monkeypatch.setattr(tracker, "restart", lambda: (restarts.append(
-        (steps[0], tracker.identified)), restart())[1])
-    result = run_tracker(tracker, demo.reader, TrackParams(), quiet=True)
-    # the first restart: after half a second, nothing identified
-    assert restarts[0] == (round(0.5 * demo.reader.fps), False)
-    assert tracker.region.params.acquisition.min_periodicity == 0.0
-    assert result is not None and tracker.region.identified
-    valid = result.valid
-    assert valid[seen.min(axis=1) >= 0.999].mean() > 0.95
-    error = result.poses[valid, :3] - points[valid]
-    assert np.sqrt(np.mean(np.sum((error - error.mean(axis=0)) ** 2, axis=1))) < 0.005

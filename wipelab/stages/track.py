@@ -67,9 +67,6 @@ DEFAULT_COLOUR = "yellow"
 BACKWARD_BYTES = 400_000_000
 #: Points of the first valid frames that start the backward track.
 SEED_FRAMES = 3
-#: Seconds of video in which a wiping sponge shows as periodic motion if it ever does (a few
-#: periods of the slowest wiping): when nothing has by then, any motion will do.
-PERIODIC_SEARCH_SECONDS = 10.0
 LEFT_FRAME, RIGHT_FRAME = "stereo_left_optical", "stereo_right_optical"
 
 
@@ -322,9 +319,7 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
     frames were valid.
 
     Two passes: a warm-up over the first ``params.warmup`` seconds (longer until the sponge
-    is found and the plane it moves in is known; when nothing of its colour has moved
-    periodically within :data:`PERIODIC_SEARCH_SECONDS`, the warm-up starts again from the
-    first frame and takes any motion), then, with what it learnt, the tracking
+    is found and the plane it moves in is known), then, with what it learnt, the tracking
     pass from the first frame (so that the first seconds are tracked too); the frames before
     that pass's first valid one are then followed backwards from it
     (:func:`track_backwards`). ``on_frame`` is called with each frame's index and estimate
@@ -338,7 +333,6 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
     m = params.logged_particles
     particles = np.full((n, m, 4), np.nan)
     least = int(round(params.warmup * reader.fps))
-    periodic_search = int(round(PERIODIC_SEARCH_SECONDS * reader.fps))
     for attempt in range(2):
         with tqdm(total=n, desc="track: finding the sponge", unit="frame", disable=quiet,
                   file=sys.stderr, leave=False) as bar:
@@ -347,12 +341,9 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
                 bar.update()
                 if k + 1 >= least and tracker.ready:
                     break
-                if attempt == 0 and k + 1 >= periodic_search and not tracker.identified:
-                    break
         if tracker.identified:
             break
-        # nothing moved periodically (a video too short for the wiping to show as periodic
-        # motion, or wiping too irregular): any motion will do
+        # a video too short for the wiping to show as periodic motion: any motion will do
         tracker.accept_any_motion()
         tracker.restart()
     if not tracker.identified:
