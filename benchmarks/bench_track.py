@@ -32,8 +32,8 @@ Per scene
   the two tracking passes and writing the logs), and of the tracking pass alone over the
   frames in which the sponge was lost (decoding included); the command's CPU time (all its
   threads: tracker, decoders, preview encoder) per frame pair, which says whether a faster
-  run needs less work or more parallel work (on 2 cores, 2 x 1000 / pairs/s ms is all there
-  is).
+  run needs less work or more parallel work (at P pairs/s on c cores there are
+  c x 1000 / P ms of CPU per pair to spend).
 
 The same videos go through the baseline (OpenCV CamShift per camera, the two window centres
 triangulated). At the end: medians and worst cases against the targets, the factors of
@@ -55,8 +55,8 @@ import argparse
 import contextlib
 import io
 import json
-import resource
 import os
+import resource
 import shutil
 import subprocess
 import sys
