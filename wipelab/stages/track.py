@@ -550,8 +550,8 @@ def track_blueprint(scene: TrackScene, area: DemonstrationArea, height: float) -
 PREVIEW_WIDTH = 480
 #: Heaviest demo video (bits per second) the logs hold as it is: each log (MCAP and RRD)
 #: would otherwise be about as large as the demo's videos, and take seconds to write (dev
-#: scene 31, 2 x 9 Mbit/s: 140 MB of logs and 10 % of the command's time), where its
-#: previews are a few MB, made beside the tracker.
+#: scene 31, 2 x 9 Mbit/s: 140 MB of logs, written in 2 of the command's 8 s; with
+#: previews, a few MB made beside the tracker, the command ran about 7 % faster).
 LOGGED_AS_IT_IS_MAX_BITRATE = 4e6
 #: Frame pairs waiting for the previews' encoder at most.
 PREVIEW_QUEUE = 8
