@@ -70,7 +70,8 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from tests.stereo_scenes import HELD_OUT_SEEDS_FROM, render_scene  # noqa: E402
+from tests.stereo_scenes import (GENERATOR_VERSION, HELD_OUT_SEEDS_FROM,  # noqa: E402
+                                 render_scene)
 from wipelab.stages.learn import LearnParams, learn  # noqa: E402
 from wipelab.stages.synth import SynthParams, synth  # noqa: E402
 from wipelab.stages.track import TrackParams, open_demo, run_tracker  # noqa: E402
@@ -139,13 +140,25 @@ class Row:
     truth_fit_error: float    # % off the demonstrated tempo, an offline fit of truth.csv
 
 
+def rendered(path: Path) -> bool:
+    """Whether ``path`` holds a scene of the current generator; one of an earlier generator
+    is removed (the same seed renders another scene now)."""
+    info = path / "scene.json"
+    if not info.is_file():
+        return False
+    if json.loads(info.read_text()).get("generator_version") == GENERATOR_VERSION:
+        return True
+    shutil.rmtree(path)
+    return False
+
+
 def held_out_demo(workdir: Path, index: int, duration: float) -> Demo:
     """Render (once) held-out scene ``index`` and load its truth."""
     seed = HELD_OUT_SEEDS_FROM + index
     pattern = PATTERNS[index % 3]
     frequency = round(0.5 + (index // 3) % 8 / 7.0, 3)
     path = workdir / f"heldout_{seed}_{pattern}_{frequency:g}hz_{duration:g}s"
-    if not (path / "scene.json").is_file():
+    if not rendered(path):
         render_scene(path, seed, duration=duration, pattern=pattern, frequency_hz=frequency)
     scene = json.loads((path / "scene.json").read_text())
     return _load(path, f"{seed} {pattern} {frequency:g}Hz", scene["sponge"]["colour"],
@@ -160,7 +173,7 @@ def dev_demo(workdir: Path, seed: int, duration: float) -> Demo:
     if seed >= HELD_OUT_SEEDS_FROM:
         raise SystemExit(f"--dev-seeds: {seed} is a held-out seed (>= {HELD_OUT_SEEDS_FROM})")
     path = workdir / f"dev_{seed}_{duration:g}s"
-    if not (path / "scene.json").is_file():
+    if not rendered(path):
         render_scene(path, seed, duration=duration)
     scene = json.loads((path / "scene.json").read_text())
     summary = scene.get("summary", {})

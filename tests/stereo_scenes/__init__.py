@@ -25,9 +25,10 @@ Usage::
     python -m tests.stereo_scenes.gallery OUT.png --seeds 0-11
 """
 
-from tests.stereo_scenes.demo_dir import render_plan, render_scene
+from tests.stereo_scenes.demo_dir import GENERATOR_VERSION, render_plan, render_scene
 from tests.stereo_scenes.plan import ScenePlan, plan_scene
 
 HELD_OUT_SEEDS_FROM = 10000
 
-__all__ = ["render_scene", "render_plan", "plan_scene", "ScenePlan", "HELD_OUT_SEEDS_FROM"]
+__all__ = ["render_scene", "render_plan", "plan_scene", "ScenePlan", "HELD_OUT_SEEDS_FROM",
+           "GENERATOR_VERSION"]

@@ -120,22 +120,38 @@ class HoldingHand:
     fingers: list
 
 
-def holding_hand(person, sponge_model: SpongeModel, centre, R, table_z: float) -> HoldingHand:
+def grip(person, poses, table_z: float) -> np.ndarray:
+    """The direction (sponge frame, unit (3,) along one of its horizontal axes) in which the
+    holding hand points, kept for the whole demonstration as a person keeps their grip: the
+    sponge axis closest to "away from the shoulder" in most of ``poses`` ((centre, R) pairs
+    over the demonstration)."""
+    shoulder = shoulder_of(person, table_z, holding=True)
+    votes = {}
+    for centre, R in poses:
+        away = centre - shoulder
+        away_local = R.T @ _unit(np.array([away[0], away[1], 0.0]))
+        axis = int(np.argmax(np.abs(away_local[:2])))
+        key = (axis, float(np.sign(away_local[axis])))
+        votes[key] = votes.get(key, 0) + 1
+    axis, sign = max(votes, key=lambda key: (votes[key], key))
+    direction = np.zeros(3)
+    direction[axis] = sign
+    return direction
+
+
+def holding_hand(person, sponge_model: SpongeModel, centre, R, table_z: float,
+                 f_local: np.ndarray) -> HoldingHand:
     """Arm and hand gripping the sponge at pose (centre, R).
 
-    The hand points along the sponge axis closest to "away from the shoulder": the palm
-    lies on the rear part of the top face (``person.palm_offset`` of its length), the four
-    fingers wrap over one side and the thumb over the other, the forearm rises to the elbow.
+    The hand points along ``f_local`` (sponge frame, see :func:`grip`): the palm lies on the
+    rear part of the top face (``person.palm_offset`` of its length), the four fingers wrap
+    over one side and the thumb over the other, the forearm rises to the elbow.
     """
     s = person.hand_scale
     half = sponge_model.half
     c = half[2]
     shoulder = shoulder_of(person, table_z, holding=True)
-    away = centre - shoulder
-    away_local = R.T @ _unit(np.array([away[0], away[1], 0.0]))
-    axis = int(np.argmax(np.abs(away_local[:2])))
-    f_local = np.zeros(3)
-    f_local[axis] = np.sign(away_local[axis])
+    axis = int(np.argmax(np.abs(f_local[:2])))
     l_local = np.cross([0, 0, 1.0], f_local)
     along, across = half[axis], half[1 - axis]
     thumb_side = 1.0 if person.handed == "right" else -1.0

@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 
 from tests.stereo_scenes import textures
-from tests.stereo_scenes.actors import HoldingHand, SpongeModel, free_arm, holding_hand
+from tests.stereo_scenes.actors import HoldingHand, SpongeModel, free_arm, grip, holding_hand
 from tests.stereo_scenes.camera import Canvas
 from tests.stereo_scenes.lens import distort
 from tests.stereo_scenes.motion import WipingMotion
@@ -57,6 +57,8 @@ class Scene:
                                    m.orientation, plan.table.height, self.sponge.half, m.yaw0,
                                    m.still_s, plan.duration,
                                    np.random.default_rng([plan.seed, 100]))
+        centres, Rs, _ = self.motion.pose(np.linspace(0.0, plan.duration, 61))
+        self.grip = grip(plan.person, zip(centres, Rs), plan.table.height)
         left, right = plan.cameras.pair()
         self.eye_mid = 0.5 * (left.centre + right.centre)
         self.camera_right = left.T_world_cam[:3, 0]
@@ -71,7 +73,7 @@ class Scene:
         return MovingState(t, centre, R, float(yaw[0]), self.sponge.world_faces(centre, R),
                            self.sponge.world_vertices(centre, R),
                            holding_hand(self.plan.person, self.sponge, centre, R,
-                                        self.plan.table.height), occluder)
+                                        self.plan.table.height, self.grip), occluder)
 
 
 class CameraView:

@@ -15,10 +15,12 @@ import pytest
 
 from tests.stereo_scenes import __main__ as scenes_cli
 from tests.stereo_scenes import plan_scene, render_scene
+from tests.stereo_scenes.actors import grip
 from tests.stereo_scenes.camera import Camera, Canvas, look_at
 from tests.stereo_scenes.lens import distort, monotonic_radius, undistort
 from tests.stereo_scenes.motion import RAMP_S, WipingMotion
 from tests.stereo_scenes.plan import NAMED_HSV, Video
+from tests.stereo_scenes.render import Scene
 from tests.stereo_scenes.video import VideoFile
 from wipelab.vision.calibration import load_calibration
 
@@ -232,3 +234,16 @@ def test_motion_keeps_the_nominal_frequency_and_the_sponge_on_the_table(pattern)
     assert np.allclose(lowest, 0.8, atol=1e-12)               # the bottom touches the table
     along = (centre[:, :2] - [0.7, 0.1]) @ [np.cos(0.4), np.sin(0.4)]
     assert 0.25 < np.ptp(along) < 0.36                        # 0.3 m across, with drift
+
+
+def test_the_hand_keeps_its_grip_on_the_sponge_all_demonstration():
+    # scene 47 wipes a wide figure-8: "away from the shoulder" points along the sponge's
+    # length in some poses and across it in others; a person does not change grip for that
+    plan = plan_scene(47, duration=30.0)
+    scene = Scene(plan)
+    states = [scene.state(t) for t in np.linspace(0.0, 30.0, 121)]
+    per_pose = {tuple(grip(plan.person, [(s.centre, s.R)], plan.table.height)) for s in states}
+    assert len(per_pose) > 1
+    palm = np.array([s.R.T @ (s.hand.palm.centre - s.centre) for s in states])  # sponge frame
+    assert np.ptp(palm, axis=0).max() < 1e-9
+    assert np.linalg.norm(palm[0, :2]) > 0.01  # on the rear part of the top face, not the middle
