@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 
 from wipelab.vision.colour_model import NAMED_COLOURS
-from wipelab.vision.colour_regions import prior_model
+from wipelab.vision.colour_regions import find_blobs, prior_model
 from wipelab.vision.static_background import StaticBackground
 from wipelab.vision.undistortion import Undistorter
 
@@ -123,3 +123,47 @@ def test_where_the_sponge_has_been_a_still_thing_of_its_size_is_a_ghost_a_cloth_
     background.release_visited(path, GHOST)
     assert background.still[rest].sum() == 0              # the sponge's own ghost
     assert background.still[cloth].mean() > 0.9          # too large to be the sponge
+
+
+def _gingham(shift: float, rng, sponge_at: tuple[int, int] | None = None) -> np.ndarray:
+    """A pink and white gingham tablecloth (12 px squares), shifted by ``shift`` pixels, JPEG
+    compressed, with an optional vivid magenta sponge (24 x 16 px) at ``sponge_at``."""
+    y, x = np.mgrid[0:SIZE[1], 0:SIZE[0]].astype(np.float64)
+    stripes = (((x + shift) // 12) % 2) + (((y + 0.5 * shift) // 12) % 2)  # 0, 1 or 2 pink
+    white, pink = np.array([238, 238, 239.0]), np.array([115, 66, 153.0])
+    frame = white + (pink - white) * (stripes[..., None] / 2.0)
+    if sponge_at is not None:
+        u, v = sponge_at
+        frame[v:v + 16, u:u + 24] = (150, 59, 196)
+    frame = np.clip(cv2.GaussianBlur(frame, (0, 0), 0.7) + rng.normal(0, 2, frame.shape), 0,
+                    255).astype(np.uint8)
+    return cv2.imdecode(cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, 60])[1],
+                        cv2.IMREAD_COLOR)
+
+
+def test_a_tablecloth_checkered_in_the_sponges_colour_leaves_only_the_sponge_to_find():
+    """A low-resolution background places the edges of a checkered still thing a pixel off
+    (compression, noise, sub-pixel shifts): without what the background explains, the blob
+    finder sees the vivid sponge on the tablecloth and nothing else, in the search's
+    low-resolution image and in a full-resolution measurement window alike."""
+    rng = np.random.default_rng(3)
+    K = np.array([[150.0, 0, 80], [0, 150.0, 60], [0, 0, 1]])
+    background = StaticBackground(Undistorter(K, np.zeros(5), SIZE), scale=0.5)
+    model = prior_model(NAMED_COLOURS["pink"])
+    images = np.stack([background.canvas_image(_gingham(rng.uniform(-0.4, 0.4), rng))
+                       for _ in range(12)])
+    background.initialise(images, np.stack([model.back_project(i) > 0.5 for i in images]))
+    frame = _gingham(0.6, rng, sponge_at=(60, 50))
+    sponge_centre = np.array([71.5, 57.5])  # canvas pixels
+    image = background.canvas_image(frame)
+    for name, image, still, scale in (
+            ("search", image, background.still_in_canvas_image(image), background.scale),
+            ("window", frame, background.still_colour(frame, np.zeros(2), 1), 1.0)):
+        probability = model.back_project(image)
+        assert probability[still].size > 0.3 * probability.size, name  # the cloth is still
+        probability[still] = 0.0
+        blobs = find_blobs(probability, min_area=6)
+        assert len(blobs) == 1, (name, [b.centroid for b in blobs])
+        centre = (blobs[0].centroid + 0.5) / scale - 0.5
+        assert np.linalg.norm(centre - sponge_centre) < 1.5, name
+        assert blobs[0].area / scale ** 2 > 0.8 * 24 * 16, name  # none of it taken for still

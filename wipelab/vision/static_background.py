@@ -41,13 +41,13 @@ class StaticBackground:
         Resolution of the background relative to the canvas.
     step : float
         Grey levels by which an update moves each learnt pixel towards what it shows.
-    difference : float
+    difference : int
         A pixel differs from the background when one of its channels differs by more than
         this (grey levels).
     """
 
     def __init__(self, undistorter: Undistorter, scale: float, step: float = 4.0,
-                 difference: float = 24.0):
+                 difference: int = 24):
         self.scale = scale
         self.step = step
         self.difference = difference
@@ -213,8 +213,28 @@ class StaticBackground:
         always did: bool (h, w); None before the background knows anything."""
         if not self.updates or not self.still.any():
             return None
-        b, g, r = cv2.split(cv2.absdiff(image, self.mean))
-        return (self.still > 0) & (cv2.max(cv2.max(b, g), r) < self.difference)
+        return self._unchanged(image, self.mean, self.still, 1)
+
+    def _unchanged(self, image: np.ndarray, background: np.ndarray, still: np.ndarray,
+                   reach: int) -> np.ndarray:
+        """Where ``image`` (BGR uint8) shows what ``background`` (the same size) shows at the
+        pixel or at one ``reach`` pixels from it (a background pixel's width), next to a
+        still thing of the sponge's colour (``still``, uint8): the edges of a checkered or
+        grained still thing move by a pixel as the low-resolution background, compression
+        and noise place them, and a pixel compared only with its own background pixel
+        would leave a fringe of the colour round every square of a tablecloth of it."""
+        height, width = image.shape[:2]
+        near = cv2.dilate(still, np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)) > 0
+        padded = cv2.copyMakeBorder(background, reach, reach, reach, reach,
+                                    cv2.BORDER_REPLICATE)
+        unchanged = np.zeros((height, width), np.uint8)
+        largest = (self.difference - 1,) * 3
+        for dy, dx in ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1),
+                       (1, 1)):
+            y, x = reach + dy * reach, reach + dx * reach
+            difference = cv2.absdiff(image, padded[y:y + height, x:x + width])
+            unchanged |= cv2.inRange(difference, (0, 0, 0), largest)
+        return near & (unchanged > 0)
 
     def _background_pixels(self, canvas_points: np.ndarray) -> np.ndarray:
         """Background coordinates (..., 2) of canvas (full-resolution) points (..., 2): the
@@ -244,7 +264,4 @@ class StaticBackground:
                                flags=cv2.WARP_INVERSE_MAP | cv2.INTER_NEAREST)
         background = cv2.warpAffine(self.mean, transform, (width, height), flags=flags,
                                     borderMode=cv2.BORDER_REPLICATE)
-        difference = cv2.absdiff(window, background)
-        b, g, r = cv2.split(difference)
-        largest = cv2.max(cv2.max(b, g), r)
-        return (still > 0) & (largest < self.difference)
+        return self._unchanged(window, background, still, max(1, round(1.0 / (step * s))))
