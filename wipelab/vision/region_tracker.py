@@ -52,6 +52,9 @@ BACKGROUND_REFRESH_FRAMES = 15
 BACKGROUND_FRAMES = 12
 #: ... and from this many when a moving candidate is checked (both cameras at once).
 IDENTIFY_BACKGROUND_FRAMES = 24
+#: Until the usual region areas are known, a frame is valid only when the two cameras'
+#: regions (square metres at the sponge's distance) agree within this factor.
+FIRST_AREAS_AGREEMENT = 1.6
 
 
 @dataclass(frozen=True)
@@ -635,6 +638,11 @@ class RegionTracker:
         if np.all(np.isfinite(rays)):
             stereo = triangulate_rays(rays[:1], rays[1:], self.calibration.R,
                                       self.calibration.T)[0][0]
+        if not any(problems) and min(len(self.areas[0]), len(self.areas[1])) < 5 and \
+                max(metric_areas) > FIRST_AREAS_AGREEMENT * min(metric_areas):
+            # the first frames teach what is usual (area, rays' offset): a region that takes
+            # in a hand of a near hue in one camera would teach it wrong for good
+            problems = ["of another size than the other camera's"] * 2
         good = [k for k in range(2) if not problems[k]]
         reason = "; ".join(f"{side} region {problem}" for side, problem
                            in zip(("left", "right"), problems) if problem)
