@@ -17,9 +17,10 @@ Per frame pair (paper, Sec. III-A2: colour segmentation in both cameras, 30 Hz):
    height its stereo points keep above the table. Stereo alone is poor along the line of
    sight; the plane makes every camera's lateral precision count;
 4. check: a frame is valid only when both regions have their usual size (a hand passing in
-   front shrinks them), both rays agree on the plane as they usually do, and the point
-   continues the track; otherwise the sponge is lost and found again by the rules of step 1,
-   with what is now known about it (colour, size, static objects of its colour).
+   front shrinks them; until the usual sizes are known, the two cameras' regions must agree
+   in size), both rays agree on the plane as they usually do, and the point continues the
+   track; otherwise the sponge is lost and found again by the rules of step 1, with what is
+   now known about it (colour, size, static objects of its colour).
 """
 
 from __future__ import annotations
