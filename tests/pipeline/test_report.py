@@ -79,6 +79,19 @@ def test_track_figure_draws_xyz_apart_against_the_truth_with_lost_frames_shaded(
     assert len(colours) == 3                              # x, y, z each its own colour
 
 
+def test_a_single_frame_of_a_quality_is_shaded_as_wide_as_a_frame():
+    from wipelab.pipeline.figures import track_figure
+
+    t = np.arange(0, 2, 1 / 30)
+    position = np.column_stack([np.cos(t), np.sin(t), np.full(t.size, 0.9)])
+    quality = ["box"] * t.size
+    quality[30] = "centroid"
+    figure = track_figure(t, position, np.ones(t.size, bool), quality=quality)
+    (span,) = figure.axes[0].patches
+    assert np.isclose(span.get_width(), 1 / 30)
+    assert np.isclose(span.get_x() + 0.5 * span.get_width(), t[30])
+
+
 def test_the_quality_column_is_read_when_track_csv_has_one(tmp_path):
     from wipelab.pipeline.report import _quality
 

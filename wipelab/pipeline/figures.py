@@ -334,12 +334,14 @@ def force_error_bars_figure(rms_error: dict[str, dict[str, float]], title: str) 
 
 
 def _shade(ax, t: np.ndarray, mask: np.ndarray, colour: str, label: str) -> None:
-    """Shade the stretches of ``t`` where ``mask`` holds, labelled once."""
+    """Shade the stretches of ``t`` where ``mask`` holds, labelled once; each sample covers
+    its own period (half of it either side), so that a single frame shows too."""
     if not mask.any():
         return
+    half = 0.5 * float(np.median(np.diff(t))) if len(t) > 1 else 0.0
     edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
     for n, (start, stop) in enumerate(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1))):
-        ax.axvspan(t[start], t[stop - 1], color=colour, alpha=0.25, linewidth=0,
+        ax.axvspan(t[start] - half, t[stop - 1] + half, color=colour, alpha=0.25, linewidth=0,
                    label=label if n == 0 else None)
 
 
