@@ -16,6 +16,10 @@ half of the time and turns into a still thing of its own (a ghost): a still thin
 under the sponge's region (nine tenths of it), or holds the middle of its path, is
 remembered as a ghost until the median there is no longer of the sponge's colour.
 
+A pixel next to a still thing still shows it when it matches the background at its place
+or a background pixel away: the edges of a checkered or grained thing move by a pixel as the
+low-resolution background, compression and noise place them.
+
 The background is kept at low resolution in the undistorted canvas of
 :class:`~wipelab.vision.undistortion.Undistorter`, so that a measurement window reads it
 with one affine warp.
