@@ -5,6 +5,7 @@ forgotten once it lies under the tracked region. Drawn frames, no video."""
 import cv2
 import numpy as np
 
+from wipelab.vision._background_kernel import matches_background_near
 from wipelab.vision.colour_model import NAMED_COLOURS
 from wipelab.vision.colour_regions import find_blobs, prior_model
 from wipelab.vision.static_background import StaticBackground
@@ -167,3 +168,23 @@ def test_a_tablecloth_checkered_in_the_sponges_colour_leaves_only_the_sponge_to_
         centre = (blobs[0].centroid + 0.5) / scale - 0.5
         assert np.linalg.norm(centre - sponge_centre) < 1.5, name
         assert blobs[0].area / scale ** 2 > 0.8 * 24 * 16, name  # none of it taken for still
+
+
+def test_a_pixel_shows_its_background_at_its_place_or_one_reach_away_and_only_near_a_still_thing():
+    background = np.zeros((9, 9, 3), np.uint8)
+    background[4, 6] = (200, 100, 50)   # the colour two pixels right of the middle
+    background[8, 8] = (90, 90, 90)     # a corner: its replicated edge stands for outside
+    image = np.full((9, 9, 3), 150, np.uint8)  # far from both colours and from black
+    image[4, 4] = (210, 110, 40)        # within 23 grey levels of background[4, 6]
+    image[8, 7] = (90, 90, 90)
+    near = np.ones((9, 9), np.uint8)
+    near[0, :] = 0                      # no still thing up here: never compared
+    image[0, 0] = background[0, 0]
+
+    found = matches_background_near(image, background, near, 2, 23)
+    assert found[4, 4]                                       # two pixels right: reach 2
+    assert not matches_background_near(image, background, near, 1, 23)[4, 4]
+    assert not matches_background_near(image, background, near, 2, 9)[4, 4]  # 10 levels off
+    assert found[8, 7]                  # x + 2 is past the edge: the edge pixel is compared
+    assert not found[0, 0]              # identical, but no still thing near
+    assert found.sum() == 2

@@ -30,6 +30,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from wipelab.vision._background_kernel import matches_background_near
 from wipelab.vision.colour_model import ColourModel
 from wipelab.vision.undistortion import Undistorter
 
@@ -227,18 +228,8 @@ class StaticBackground:
         grained still thing move by a pixel as the low-resolution background, compression
         and noise place them, and a pixel compared only with its own background pixel
         would leave a fringe of the colour round every square of a tablecloth of it."""
-        height, width = image.shape[:2]
-        near = cv2.dilate(still, np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)) > 0
-        padded = cv2.copyMakeBorder(background, reach, reach, reach, reach,
-                                    cv2.BORDER_REPLICATE)
-        unchanged = np.zeros((height, width), np.uint8)
-        largest = (self.difference - 1,) * 3
-        for dy, dx in ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1),
-                       (1, 1)):
-            y, x = reach + dy * reach, reach + dx * reach
-            difference = cv2.absdiff(image, padded[y:y + height, x:x + width])
-            unchanged |= cv2.inRange(difference, (0, 0, 0), largest)
-        return near & (unchanged > 0)
+        near = cv2.dilate(still, np.ones((2 * reach + 1, 2 * reach + 1), np.uint8))
+        return matches_background_near(image, background, near, reach, self.difference - 1)
 
     def _background_pixels(self, canvas_points: np.ndarray) -> np.ndarray:
         """Background coordinates (..., 2) of canvas (full-resolution) points (..., 2): the
