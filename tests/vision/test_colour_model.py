@@ -5,6 +5,7 @@ import pytest
 from wipelab.vision.colour_model import (NAMED_COLOURS, ColourModel, ColourSource, HsvRange,
                                          LinearColourFeature, largest_blob, parse_hsv_range,
                                          vivid_part)
+from wipelab.vision.colour_regions import prior_model
 
 SPONGE, WOOD, SKIN = (40, 205, 240), (150, 188, 214), (122, 152, 208)
 
@@ -101,3 +102,22 @@ def test_a_model_learnt_from_the_vivid_part_reads_the_sponge_but_not_the_arm():
 def test_vivid_part_leaves_a_region_of_one_colour_whole():
     image, mask = _orange_sponge_and_arm(np.random.default_rng(2), (8, 110, 204))
     assert np.array_equal(vivid_part(image, mask), mask)
+
+
+def test_a_learnt_model_bounded_by_the_named_colour_leaves_out_a_neighbouring_hue_it_never_saw():
+    """A purple sponge (hue 140) learnt on a grey table; a tablecloth of hue 152, just outside
+    purple's box, was not in the window: the histogram's smoothed tail reads it as sponge,
+    the model bounded by the named colour's prior does not."""
+    rng = np.random.default_rng(3)
+    image = np.clip(np.array((128, 128, 128), float) + rng.normal(0, 4, (120, 200, 3)), 0, 255)
+    # the sponge's pixels scatter (shading, noise, compression)
+    image[40:80, 60:120] = np.clip((241, 23, 168) + rng.normal(0, 10, (40, 60, 3)), 0, 255)
+    mask = np.zeros((120, 200), np.uint8)
+    mask[40:80, 60:120] = 255
+    learnt = ColourModel.fit([image.astype(np.uint8)], [mask])
+    cloth = np.full((10, 10, 3), (200, 40, 210), np.uint8)  # hue 152
+    prior = prior_model(NAMED_COLOURS["purple"])
+    assert learnt.back_project(cloth).mean() > 0.9
+    bounded = learnt.at_most(prior)
+    assert bounded.back_project(cloth).mean() < 0.5
+    assert bounded.back_project(image.astype(np.uint8))[45:75, 65:115].mean() > 0.95

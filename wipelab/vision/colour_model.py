@@ -162,6 +162,13 @@ class ColourModel:
         blurred = cv2.GaussianBlur(wrapped, (0, 0), sigma, borderType=cv2.BORDER_REPLICATE)
         return blurred[pad:-pad]
 
+    def at_most(self, bound: "ColourModel") -> "ColourModel":
+        """This model where it says no more than ``bound`` (e.g. the named colour's prior),
+        ``bound`` elsewhere: a model learnt from a few windows has smoothed tails that reach
+        colours the windows did not show (a table of a neighbouring hue), and there the
+        ratio reads 1."""
+        return ColourModel(np.minimum(self.ratio, bound.ratio), self.v_min)
+
     def back_project(self, frame_bgr: np.ndarray) -> np.ndarray:
         """Sponge probability per pixel, float32 in [0, 1], shape (h, w)."""
         hsv = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2HSV)

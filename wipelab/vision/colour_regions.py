@@ -5,7 +5,8 @@ The named colours of :data:`~wipelab.vision.colour_model.NAMED_COLOURS` are boxe
 A real sponge's body drifts out of such a box under coloured light and shading, so the
 prior is soft: full inside the box, falling off over a few hue and saturation units outside.
 Once the tracker has found the sponge it learns its own colour model from the sponge's
-pixels (:meth:`~wipelab.vision.colour_model.ColourModel.fit`) and no longer needs the box.
+pixels (:meth:`~wipelab.vision.colour_model.ColourModel.fit`), bounded by the prior: the
+sponge's body is of the named colour, a table of a neighbouring hue is not.
 """
 
 from __future__ import annotations

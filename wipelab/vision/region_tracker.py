@@ -485,12 +485,16 @@ class RegionTracker:
 
     def _colour(self, windows, cores, masks, unsure=None) -> ColourModel:
         """The colour model of the sponge's pixels ``cores`` in both cameras' windows (of its
-        whole region ``masks`` when a camera shows no core; the prior when neither)."""
+        whole region ``masks`` when a camera shows no core; the prior when neither). With a
+        named colour or range, the model says no more than the prior (a prior learnt from
+        a region, ``--roi``, is no bound)."""
         if all(core.any() for core in cores):
-            return ColourModel.fit(windows, cores, unsure=unsure)
-        if all(mask.any() for mask in masks):
-            return ColourModel.fit(windows, masks)
-        return self.prior
+            model = ColourModel.fit(windows, cores, unsure=unsure)
+        elif all(mask.any() for mask in masks):
+            model = ColourModel.fit(windows, masks)
+        else:
+            return self.prior
+        return model if self.colour.roi is not None else model.at_most(self.prior)
 
     def _above_the_table(self, frames, track: CandidateTrack) -> bool:
         """Whether a moving candidate keeps above the table (by dense stereo around it): a
