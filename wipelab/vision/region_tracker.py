@@ -462,6 +462,11 @@ class RegionTracker:
         for view, frame, background in zip(self.views, frames, self.backgrounds):
             window, origin, _ = self._window(view, frame, point, 1.5 * self.size)
             probability = self.prior.back_project(window)
+            # a table or cloth of the named colour that the sponge lies on is a still thing:
+            # its colour is learnt as what the sponge is not
+            still = background.still_colour(window, origin, 1)
+            if still is not None:
+                probability[still] = 0.0
             centre = view.pixel(point) - origin
             reach = 0.8 * self.size * view.focal / view.depth(point)
             blobs = [b for b in find_blobs(probability, min_area=4)
