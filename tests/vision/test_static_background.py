@@ -5,7 +5,7 @@ forgotten once it lies under the tracked region. Drawn frames, no video."""
 import cv2
 import numpy as np
 
-from wipelab.vision._background_kernel import matches_background_near
+from wipelab.vision._background_kernel import matches_background_near, step_towards
 from wipelab.vision.colour_model import NAMED_COLOURS
 from wipelab.vision.colour_regions import find_blobs, prior_model
 from wipelab.vision.static_background import StaticBackground
@@ -188,3 +188,11 @@ def test_a_pixel_shows_its_background_at_its_place_or_one_reach_away_and_only_ne
     assert found[8, 7]                  # x + 2 is past the edge: the edge pixel is compared
     assert not found[0, 0]              # identical, but no still thing near
     assert found.sum() == 2
+
+
+def test_the_median_steps_towards_each_new_image_channel_by_channel():
+    median = np.array([[[10.0, 20.0, 30.0], [50.0, 50.0, 50.0]]], np.float32)
+    image = np.array([[[12, 20, 0], [0, 255, 50]]], np.uint8)
+    steps = np.array([[4.0, 0.0]], np.float32)   # the second pixel lies outside the frame
+    step_towards(median, image, steps)
+    assert median.tolist() == [[[14.0, 20.0, 26.0], [50.0, 50.0, 50.0]]]

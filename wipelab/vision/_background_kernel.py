@@ -1,5 +1,6 @@
-"""Where an image still shows its background, compiled with numba (the static background's
-comparison, :meth:`wipelab.vision.static_background.StaticBackground.still_in_canvas_image`).
+"""The static background's per-pixel loops, compiled with numba: where an image still shows
+its background (:meth:`wipelab.vision.static_background.StaticBackground.still_in_canvas_image`),
+and the approximate median's step towards a new image.
 
 Only the pixels near a still thing are compared, and each stops at the first background
 pixel it matches: a frame with a small still thing costs little, where comparing whole
@@ -42,6 +43,20 @@ def matches_background_near(image, background, near, reach, largest):
                 if out[y, x]:
                     break
     return out
+
+
+@njit(cache=True)
+def step_towards(median, image, steps):
+    """Move ``median`` (h, w, 3 float32, C-contiguous; in place) by ``steps`` (h, w float32)
+    towards ``image`` (h, w, 3 uint8) in each channel (none where they are equal): the
+    approximate running median of McFarlane & Schofield (1995)."""
+    flat_median, flat_image, flat_steps = median.reshape(-1), image.reshape(-1), steps.reshape(-1)
+    for i in range(flat_steps.size):
+        step = flat_steps[i]
+        for c in range(3):
+            j = 3 * i + c
+            difference = np.float32(flat_image[j]) - flat_median[j]
+            flat_median[j] += step * (np.float32(difference > 0) - np.float32(difference < 0))
 
 
 forget_stale_kernels(__name__)

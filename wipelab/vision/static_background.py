@@ -30,7 +30,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from wipelab.vision._background_kernel import matches_background_near
+from wipelab.vision._background_kernel import matches_background_near, step_towards
 from wipelab.vision.colour_model import ColourModel
 from wipelab.vision.undistortion import Undistorter
 
@@ -129,8 +129,7 @@ class StaticBackground:
                 inside = cv2.resize(mask.astype(np.uint8), (x1 - x0, y1 - y0),
                                     interpolation=cv2.INTER_AREA)
                 under[y0:y1, x0:x1] |= cv2.dilate(inside, np.ones((3, 3), np.uint8))
-        towards = np.sign(small.astype(np.float32) - self.image)
-        self.image += self._steps[..., None] * towards
+        step_towards(self.image, small, self._steps)
         self._mean = None
         coloured = np.zeros(self.in_frame.shape, bool)
         for model in models:
