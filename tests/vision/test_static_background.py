@@ -5,7 +5,6 @@ forgotten once it lies under the tracked region. Drawn frames, no video."""
 import cv2
 import numpy as np
 
-from wipelab.vision._background_kernel import matches_background_near, step_towards
 from wipelab.vision.colour_model import NAMED_COLOURS
 from wipelab.vision.colour_regions import find_blobs, prior_model
 from wipelab.vision.static_background import StaticBackground
@@ -170,29 +169,22 @@ def test_a_tablecloth_checkered_in_the_sponges_colour_leaves_only_the_sponge_to_
         assert blobs[0].area / scale ** 2 > 0.8 * 24 * 16, name  # none of it taken for still
 
 
-def test_a_pixel_shows_its_background_at_its_place_or_one_reach_away_and_only_near_a_still_thing():
-    background = np.zeros((9, 9, 3), np.uint8)
-    background[4, 6] = (200, 100, 50)   # the colour two pixels right of the middle
-    background[8, 8] = (90, 90, 90)     # a corner: its replicated edge stands for outside
-    image = np.full((9, 9, 3), 150, np.uint8)  # far from both colours and from black
-    image[4, 4] = (210, 110, 40)        # within 23 grey levels of background[4, 6]
-    image[8, 7] = (90, 90, 90)
-    near = np.ones((9, 9), np.uint8)
-    near[0, :] = 0                      # no still thing up here: never compared
-    image[0, 0] = background[0, 0]
-
-    found = matches_background_near(image, background, near, 2, 23)
-    assert found[4, 4]                                       # two pixels right: reach 2
-    assert not matches_background_near(image, background, near, 1, 23)[4, 4]
-    assert not matches_background_near(image, background, near, 2, 9)[4, 4]  # 10 levels off
-    assert found[8, 7]                  # x + 2 is past the edge: the edge pixel is compared
-    assert not found[0, 0]              # identical, but no still thing near
+def test_a_pixel_shows_its_background_at_its_place_or_a_pixel_away_and_only_near_a_still_thing():
+    K = np.array([[10.0, 0, 4], [0, 10.0, 4], [0, 0, 1]])
+    background = StaticBackground(Undistorter(K, np.zeros(5), (9, 9)), scale=1.0)
+    height, width = background.image.shape[:2]  # the canvas: the frame and a margin
+    background.image[:] = 0
+    background.image[6, 5] = (200, 100, 50)
+    background.image[2, 5] = (60, 160, 90)   # outside the still thing and its margin
+    background.coloured[4:, :] = True        # a still thing from row 4 down
+    background.updates = 1
+    background._classify()
+    image = np.full((height, width, 3), 150, np.uint8)  # far from every colour above
+    image[6, 4] = (210, 110, 40)             # within 23 grey levels of background[6, 5]
+    image[6, 2] = (200, 100, 50)             # three pixels from it: too far
+    image[3, 5] = (60, 160, 90)              # next to the still thing, shows [2, 5]
+    image[1, 1] = (0, 0, 0)                  # the background's, but no still thing near
+    found = background.still_in_canvas_image(image)
+    assert found[6, 4] and found[3, 5]
+    assert not found[6, 2] and not found[1, 1]
     assert found.sum() == 2
-
-
-def test_the_median_steps_towards_each_new_image_channel_by_channel():
-    median = np.array([[[10.0, 20.0, 30.0], [50.0, 50.0, 50.0]]], np.float32)
-    image = np.array([[[12, 20, 0], [0, 255, 50]]], np.uint8)
-    steps = np.array([[4.0, 0.0]], np.float32)   # the second pixel lies outside the frame
-    step_towards(median, image, steps)
-    assert median.tolist() == [[[14.0, 20.0, 26.0], [50.0, 50.0, 50.0]]]

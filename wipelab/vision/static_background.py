@@ -30,7 +30,6 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from wipelab.vision._background_kernel import matches_background_near, step_towards
 from wipelab.vision.colour_model import ColourModel
 from wipelab.vision.undistortion import Undistorter
 
@@ -129,7 +128,8 @@ class StaticBackground:
                 inside = cv2.resize(mask.astype(np.uint8), (x1 - x0, y1 - y0),
                                     interpolation=cv2.INTER_AREA)
                 under[y0:y1, x0:x1] |= cv2.dilate(inside, np.ones((3, 3), np.uint8))
-        step_towards(self.image, small, self._steps)
+        towards = np.sign(small.astype(np.float32) - self.image)
+        self.image += self._steps[..., None] * towards
         self._mean = None
         coloured = np.zeros(self.in_frame.shape, bool)
         for model in models:
@@ -227,8 +227,28 @@ class StaticBackground:
         grained still thing move by a pixel as the low-resolution background, compression
         and noise place them, and a pixel compared only with its own background pixel
         would leave a fringe of the colour round every square of a tablecloth of it."""
+        height, width = image.shape[:2]
         near = cv2.dilate(still, np.ones((2 * reach + 1, 2 * reach + 1), np.uint8))
-        return matches_background_near(image, background, near, reach, self.difference - 1)
+        unchanged = np.zeros((height, width), bool)
+        x, y, w, h = cv2.boundingRect(near)  # compared only where still things are
+        if w == 0:
+            return unchanged
+        # the background over the box grown by reach, edges replicated
+        padded = cv2.copyMakeBorder(background[max(y - reach, 0):y + h + reach,
+                                               max(x - reach, 0):x + w + reach],
+                                    reach - min(y, reach), reach - min(height - y - h, reach),
+                                    reach - min(x, reach), reach - min(width - x - w, reach),
+                                    cv2.BORDER_REPLICATE)
+        box = image[y:y + h, x:x + w]
+        matched = np.zeros((h, w), np.uint8)
+        largest = (self.difference - 1,) * 3
+        for dy, dx in ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1),
+                       (1, 1)):
+            top, left = reach + dy * reach, reach + dx * reach
+            difference = cv2.absdiff(box, padded[top:top + h, left:left + w])
+            matched |= cv2.inRange(difference, (0, 0, 0), largest)
+        unchanged[y:y + h, x:x + w] = (near[y:y + h, x:x + w] > 0) & (matched > 0)
+        return unchanged
 
     def _background_pixels(self, canvas_points: np.ndarray) -> np.ndarray:
         """Background coordinates (..., 2) of canvas (full-resolution) points (..., 2): the
