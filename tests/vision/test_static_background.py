@@ -173,14 +173,14 @@ def test_a_pixel_shows_its_background_at_its_place_or_a_pixel_away_and_only_near
     K = np.array([[10.0, 0, 4], [0, 10.0, 4], [0, 0, 1]])
     background = StaticBackground(Undistorter(K, np.zeros(5), (9, 9)), scale=1.0)
     height, width = background.image.shape[:2]  # the canvas: the frame and a margin
-    background.image[:] = 0
-    background.image[6, 5] = (200, 100, 50)
-    background.image[2, 5] = (60, 160, 90)   # outside the still thing and its margin
-    background.coloured[4:, :] = True        # a still thing from row 4 down
-    background.updates = 1
-    background._classify()
+    scene = np.zeros((height, width, 3), np.uint8)
+    scene[6, 5] = (200, 100, 50)
+    scene[2, 5] = (60, 160, 90)              # outside the still thing and its margin
+    of_its_colour = np.zeros((height, width), bool)
+    of_its_colour[4:, :] = True              # a still thing from row 4 down
+    background.initialise(scene[None], of_its_colour[None])
     image = np.full((height, width, 3), 150, np.uint8)  # far from every colour above
-    image[6, 4] = (210, 110, 40)             # within 23 grey levels of background[6, 5]
+    image[6, 4] = (210, 110, 40)             # within 23 grey levels of scene[6, 5]
     image[6, 2] = (200, 100, 50)             # three pixels from it: too far
     image[3, 5] = (60, 160, 90)              # next to the still thing, shows [2, 5]
     image[1, 1] = (0, 0, 0)                  # the background's, but no still thing near
