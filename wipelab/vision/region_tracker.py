@@ -53,6 +53,8 @@ BACKGROUND_REFRESH_FRAMES = 15
 BACKGROUND_FRAMES = 12
 #: ... and from this many when a moving candidate is checked (both cameras at once).
 IDENTIFY_BACKGROUND_FRAMES = 24
+#: A camera's usual region area is known once this many regions were measured.
+USUAL_AREA_FRAMES = 5
 #: Until the usual region areas are known, a frame is valid only when the two cameras'
 #: regions (square metres at the sponge's distance) agree within this factor.
 FIRST_AREAS_AGREEMENT = 1.6
@@ -464,9 +466,7 @@ class RegionTracker:
             probability = self.prior.back_project(window)
             # a table or cloth of the named colour that the sponge lies on is a still thing:
             # its colour is learnt as what the sponge is not
-            still = background.still_colour(window, origin, 1)
-            if still is not None:
-                probability[still] = 0.0
+            background.clear_still(probability, window, origin, 1)
             centre = view.pixel(point) - origin
             reach = 0.8 * self.size * view.focal / view.depth(point)
             blobs = [b for b in find_blobs(probability, min_area=4)
@@ -600,9 +600,7 @@ class RegionTracker:
         if background is not None:
             # the sponge's colour where the scene showed it while the sponge was elsewhere,
             # unchanged: a still thing of its colour (a cloth, a stain), not the sponge
-            still = background.still_colour(window, origin, step)
-            if still is not None:
-                probability[still] = 0.0
+            background.clear_still(probability, window, origin, step)
         scale = pixels_per_metre / step  # window pixels per metre
         blobs = find_blobs(probability, min_area=max(4.0, 0.05 * (self.size * scale) ** 2))
         centre = (view.pixel(point) - origin) / step
@@ -636,7 +634,7 @@ class RegionTracker:
                                  for area, view in zip(areas, self.views)])
         self._learn_area_range(problems, rays, metric_areas)
         for k in range(2):
-            if not problems[k] and len(self.areas[k]) >= 5:
+            if not problems[k] and self._area_known(k):
                 low, median, high = self._area_range(k)
                 ratio = metric_areas[k] / median
                 lowest = max(p.area_floor, min(p.min_area_ratio, (1 - p.area_margin) * low / median))
@@ -648,7 +646,7 @@ class RegionTracker:
         if np.all(np.isfinite(rays)):
             stereo = triangulate_rays(rays[:1], rays[1:], self.calibration.R,
                                       self.calibration.T)[0][0]
-        if not any(problems) and min(len(self.areas[0]), len(self.areas[1])) < 5 and \
+        if not any(problems) and not (self._area_known(0) and self._area_known(1)) and \
                 max(metric_areas) > FIRST_AREAS_AGREEMENT * min(metric_areas):
             # the first frames teach what is usual (area, rays' offset): a region that takes
             # in a hand of a near hue in one camera would teach it wrong for good
@@ -766,7 +764,7 @@ class RegionTracker:
         of the median (the sponge turning, the holding hand moving on it), whether or not the
         frame is then accepted; a hand passing in front is too rare to widen it much."""
         p = self.params
-        if any(problems) or len(self.areas[0]) < 5 or self._disagreement(rays):
+        if any(problems) or not self._area_known(0) or self._disagreement(rays):
             return
         for k in range(2):
             ratio = metric_areas[k] / self._area_range(k)[1]
@@ -784,6 +782,10 @@ class RegionTracker:
             cached = (self.frame // 10, compute())
             self._statistics[key] = cached
         return cached[1]
+
+    def _area_known(self, k: int) -> bool:
+        """Whether camera k's usual region area is known (:data:`USUAL_AREA_FRAMES`)."""
+        return len(self.areas[k]) >= USUAL_AREA_FRAMES
 
     def _area_range(self, k: int) -> np.ndarray:
         """2nd, 50th and 98th percentile (3,) of camera k's recent region areas."""
@@ -826,7 +828,8 @@ class RegionTracker:
         valid on the previous frame, with a region of its usual area (a hand hiding the
         sponge in one camera may show something of a near colour in the other)."""
         p = self.params
-        if not self.history or self.history[-1][0] != self.frame - 1 or len(self.areas[k]) < 5:
+        if not self.history or self.history[-1][0] != self.frame - 1 or \
+                not self._area_known(k):
             return False
         ratio = metric_area / self._area_range(k)[1]
         return p.min_area_ratio <= ratio <= p.max_area_ratio
@@ -859,7 +862,7 @@ class RegionTracker:
         self.failures = 0
         self.valid_count += 1
         for k in good:
-            if len(self.areas[k]) < 5:  # the first ones; then _learn_area_range adds them
+            if not self._area_known(k):  # the first ones; then _learn_area_range adds them
                 self.areas[k].append(areas[k])
         if self.valid_count % 30 == 0 and self.areas[0] and self.areas[1]:
             # the sponge's size as it is measured now (its first estimate came from a few

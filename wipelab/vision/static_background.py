@@ -279,3 +279,11 @@ class StaticBackground:
         background = cv2.warpAffine(self.mean, transform, (width, height), flags=flags,
                                     borderMode=cv2.BORDER_REPLICATE)
         return self._unchanged(window, background, still, max(1, round(1.0 / (step * s))))
+
+    def clear_still(self, probability: np.ndarray, window: np.ndarray, origin: np.ndarray,
+                    step: int) -> None:
+        """Set the sponge ``probability`` of a canvas window (window shape) to 0 where the
+        window shows a still thing of the sponge's colour (:meth:`still_colour`)."""
+        still = self.still_colour(window, origin, step)
+        if still is not None:
+            probability[still] = 0.0
