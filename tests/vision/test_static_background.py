@@ -188,3 +188,36 @@ def test_a_pixel_shows_its_background_at_its_place_or_a_pixel_away_and_only_near
     assert found[6, 4] and found[3, 5]
     assert not found[6, 2] and not found[1, 1]
     assert found.sum() == 2
+
+
+def test_a_background_started_again_shows_its_new_frames():
+    background = _background()
+    model = prior_model(NAMED_COLOURS["cyan"])
+    for colour in (TABLE, CLOTH):
+        frame = np.full((SIZE[1], SIZE[0], 3), colour, np.uint8)
+        images = np.stack([background.canvas_image(frame)] * 3)
+        background.initialise(images, np.stack([model.back_project(i) > 0.5 for i in images]))
+        inside = background.in_frame
+        assert np.abs(background.mean[inside].astype(int) - colour).max() <= 1
+
+
+def test_until_the_sponge_is_tracked_a_still_thing_must_look_as_the_scene_first_did():
+    """A sponge that wipes slowly sits where it is in most of the last seconds' frames: the
+    median of a later start shows it, but the scene did not when the background was first
+    learnt, so the search still sees it. Once tracked, the running median is the
+    reference."""
+    background = _background()
+    model = prior_model(NAMED_COLOURS["cyan"])
+    table = np.full((SIZE[1], SIZE[0], 3), TABLE, np.uint8)
+    resting = table.copy()
+    resting[50:66, 70:86] = SPONGE
+    sponge = _canvas(background, np.pad(np.ones((16, 16), bool), ((50, 54), (70, 74))))
+    for frame in (table, resting):   # the first start, then a later one
+        images = np.stack([background.canvas_image(frame)] * 5)
+        background.initialise(images, np.stack([model.back_project(i) > 0.5 for i in images]))
+    assert background.still[sponge].mean() > 0.9      # of the colour in the later median
+    still_now = background.still_in_canvas_image(background.canvas_image(resting))
+    assert still_now[sponge].mean() < 0.05           # but not how the scene first looked
+    background.update(resting, (model,), [], GHOST)
+    still_now = background.still_in_canvas_image(background.canvas_image(resting))
+    assert still_now[sponge].mean() > 0.9            # tracked: the running median

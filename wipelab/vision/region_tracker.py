@@ -94,8 +94,6 @@ class RegionTrackerParams:
         Frames the window keeps following the prediction after a failed measurement before
         the search covers the whole image again.
     acquisition : AcquisitionParams
-    colour_refresh : int
-        Valid frames between refreshes of the colour model (follows the lighting).
     background_every : int
         Frames between updates of the static background (:mod:`.static_background`).
     table_pairs : int
@@ -125,7 +123,6 @@ class RegionTrackerParams:
     ray_disagreement_ceiling: float = 0.4
     coast_frames: int = 6
     acquisition: AcquisitionParams = AcquisitionParams()
-    colour_refresh: int = 60
     background_every: int = 6
     table_pairs: int = 6
     table_every: int = 15

@@ -80,6 +80,11 @@ class StaticBackground:
         self.ghosts = np.zeros(shape, bool)    # ... but it is the sponge itself
         self.still = np.zeros(shape, np.uint8)
         self._mean: np.ndarray | None = None
+        # the scene as the background first learnt it (BGR uint8), what a still thing must
+        # still look like while the sponge is searched for: the median of the last seconds
+        # would take in a sponge that wipes slowly, or a path smaller than itself, and hide
+        # it from the search; None once the sponge is tracked (updates)
+        self.first: np.ndarray | None = None
         self.updates = 0
 
     def canvas_image(self, frame: np.ndarray) -> np.ndarray:
@@ -92,8 +97,12 @@ class StaticBackground:
         where each showed the sponge's colour ((m, h, w) bool), taken before the sponge
         was known: the background is their per-pixel median, of the sponge's colour where
         that colour showed in at least half of them (a moving sponge and the arm holding it
-        pass; a cloth stays)."""
+        pass; a cloth stays). The first start's median is also what still things look like
+        until the first :meth:`update` (:attr:`first`)."""
         self.image = np.median(images, axis=0).astype(np.float32)
+        self._mean = None
+        if self.first is None and self.updates == 0:
+            self.first = self.mean
         self.coloured = (2 * positive.sum(axis=0) >= len(positive)) & self.in_frame
         self.ghosts &= self.coloured
         self.updates += 1
@@ -130,7 +139,7 @@ class StaticBackground:
                 under[y0:y1, x0:x1] |= cv2.dilate(inside, np.ones((3, 3), np.uint8))
         towards = np.sign(small.astype(np.float32) - self.image)
         self.image += self._steps[..., None] * towards
-        self._mean = None
+        self._mean = self.first = None
         coloured = np.zeros(self.in_frame.shape, bool)
         for model in models:
             coloured |= model.back_project(self.mean) > 0.5
@@ -161,6 +170,12 @@ class StaticBackground:
         if len(chosen):
             self.ghosts |= np.isin(labels, chosen)
         self._classify()
+
+    @property
+    def appearance(self) -> np.ndarray:
+        """How the still things look, BGR uint8: until the sponge is tracked, as the scene
+        first looked (:attr:`first`), then the median."""
+        return self.first if self.first is not None else self.mean
 
     @property
     def mean(self) -> np.ndarray:
@@ -217,7 +232,7 @@ class StaticBackground:
         always did: bool (h, w); None before the background knows anything."""
         if not self.updates or not self.still.any():
             return None
-        return self._unchanged(image, self.mean, self.still, 1)
+        return self._unchanged(image, self.appearance, self.still, 1)
 
     def _unchanged(self, image: np.ndarray, background: np.ndarray, still: np.ndarray,
                    reach: int) -> np.ndarray:
@@ -276,7 +291,7 @@ class StaticBackground:
         flags = cv2.WARP_INVERSE_MAP | cv2.INTER_LINEAR
         still = cv2.warpAffine(self.still, transform, (width, height),
                                flags=cv2.WARP_INVERSE_MAP | cv2.INTER_NEAREST)
-        background = cv2.warpAffine(self.mean, transform, (width, height), flags=flags,
+        background = cv2.warpAffine(self.appearance, transform, (width, height), flags=flags,
                                     borderMode=cv2.BORDER_REPLICATE)
         return self._unchanged(window, background, still, max(1, round(1.0 / (step * s))))
 
