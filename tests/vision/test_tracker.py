@@ -12,7 +12,7 @@ from wipelab.vision.calibration import load_calibration
 from wipelab.vision.colour_model import ColourSource, vivid_part
 from wipelab.vision.projection import invert_transform, transform_points
 from wipelab.vision.sponge_box import SpongeBox
-from wipelab.vision.tracker import SpongeTracker, TrackerParams
+from wipelab.vision.tracker import SpongeTracker, TrackerParams, fleeting_runs
 from wipelab.vision.undistortion import pinhole
 from wipelab.vision.video_io import StereoVideoReader
 
@@ -168,3 +168,19 @@ def test_yaw_before_any_plane_is_measured_in_the_tracking_frame(calibration):
     assert abs(tracker._yaw(along_y_of_track)) == pytest.approx(np.pi / 2, abs=1e-9)
 
 
+
+
+def test_valid_runs_of_at_most_a_fifth_of_a_second_between_losses_are_fleeting():
+    """At 30 fps, runs of up to 6 valid frames are fleeting, 7 are the sponge found again;
+    a short run that the video's end cuts off is kept, one at its start is not."""
+    runs = [(0, 3), (10, 6), (20, 7), (40, 1), (50, 20), (95, 5)]   # (start, length)
+    valid = np.zeros(100, bool)
+    for start, length in runs:
+        valid[start:start + length] = True
+    fleeting = fleeting_runs(valid, fps=30.0)
+    expected = np.zeros(100, bool)
+    for start, length in [(0, 3), (10, 6), (40, 1)]:
+        expected[start:start + length] = True
+    assert np.array_equal(fleeting, expected)
+    assert fleeting_runs(valid, fps=60.0)[20:27].all()   # 7 frames at 60 fps: 0.12 s
+    assert not fleeting_runs(np.ones(5, bool), fps=30.0).any()

@@ -57,8 +57,8 @@ from wipelab.vision.demonstration_area import DemonstrationArea, measure_demonst
 from wipelab.vision.projection import invert_transform
 from wipelab.vision.sponge_box import CORNER_SIGNS, EDGES, SpongeBox, yaw_rotation
 from wipelab.vision.tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_MONO, QUALITY_NONE,
-                                    FrameEstimate, SpongeTracker,
-                                    TrackerParams)
+                                    FrameEstimate, SpongeTracker, TrackerParams,
+                                    fleeting_runs)
 from wipelab.vision.video_io import H264Writer, StereoVideoReader
 
 DEFAULT_COLOUR = "yellow"
@@ -322,8 +322,10 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
     is found and the plane it moves in is known), then, with what it learnt, the tracking
     pass from the first frame (so that the first seconds are tracked too); the frames before
     that pass's first valid one are then followed backwards from it
-    (:func:`track_backwards`). ``on_frame`` is called with each frame's index and estimate
-    of the tracking pass, ``frame_sink`` with each of its frame pairs.
+    (:func:`track_backwards`). Runs of valid frames too short to be the sponge are then
+    dropped (:func:`~wipelab.vision.tracker.fleeting_runs`). ``on_frame`` is called with
+    each frame's index and estimate of the tracking pass, ``frame_sink`` with each of its
+    frame pairs.
     """
     n = reader.frame_count
     poses = np.full((n, 4), np.nan)
@@ -378,6 +380,8 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
             bar.update()
     if before_first and seed:
         track_backwards(tracker, seed, reversed(before_first), keep)
+    fleeting = fleeting_runs(valid, reader.fps)
+    valid[fleeting], poses[fleeting], quality[fleeting] = False, np.nan, QUALITY_NONE
     if valid.sum() < 2:  # no movement to measure the demonstration area from
         return None
     t = np.arange(n) / reader.fps

@@ -16,7 +16,9 @@ Two estimators share the work:
   learnt while both held, and the filter is seeded again from it.
 
 A frame is reported valid only when the estimate that stands is backed by both images; a
-distractor, a stale estimate or a guess during an occlusion is never valid.
+distractor, a stale estimate or a guess during an occlusion is never valid. Looking back over
+a whole video, a valid run too short to be the sponge found again (:func:`fleeting_runs`) is
+not valid either.
 """
 
 from __future__ import annotations
@@ -35,8 +37,30 @@ from wipelab.vision.particle_filter import wrap_half_turn
 from wipelab.vision.sponge_box import SpongeBox
 from wipelab.vision.table_plane import table_axes
 
-__all__ = ["TrackerParams", "FrameEstimate", "SpongeTracker", "QUALITY_BOX",
-           "QUALITY_CENTROID", "QUALITY_MONO", "QUALITY_NONE"]
+__all__ = ["TrackerParams", "FrameEstimate", "SpongeTracker", "fleeting_runs",
+           "QUALITY_BOX", "QUALITY_CENTROID", "QUALITY_MONO", "QUALITY_NONE"]
+
+#: A run of valid frames between losses that lasts at most this long (seconds) is a fleeting
+#: blob of the sponge's colour, not the sponge found again: while the sponge is hidden, a
+#: cloth's edge between the occluder and the arm, or a hand of a near hue, passes the checks
+#: for a few frames; a sponge that shows again stays in view.
+FLEETING_RUN_S = 0.2
+
+
+def fleeting_runs(valid: np.ndarray, fps: float, longest_s: float = FLEETING_RUN_S
+                  ) -> np.ndarray:
+    """The frames (bool mask, shape of ``valid``) of the runs of valid frames that last at
+    most ``longest_s`` seconds at ``fps`` frames per second, except a run that the video's
+    end cuts off (it may have gone on)."""
+    valid = np.asarray(valid, bool)
+    longest = int(np.floor(longest_s * fps + 1e-9))
+    edges = np.diff(np.concatenate([[0], valid.astype(np.int8), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    fleeting = np.zeros(len(valid), bool)
+    for start, end in zip(starts, ends):
+        if end - start <= longest and end < len(valid):
+            fleeting[start:end] = True
+    return fleeting
 
 
 @dataclass(frozen=True)
