@@ -191,6 +191,8 @@ def test_a_pixel_shows_its_background_at_its_place_or_a_pixel_away_and_only_near
 
 
 def test_a_background_started_again_shows_its_new_frames():
+    """Started twice, the background's median is the second start's (it was once left
+    cached from the first)."""
     background = _background()
     model = prior_model(NAMED_COLOURS["cyan"])
     for colour in (TABLE, CLOTH):

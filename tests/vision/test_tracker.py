@@ -168,8 +168,6 @@ def test_yaw_before_any_plane_is_measured_in_the_tracking_frame(calibration):
     assert abs(tracker._yaw(along_y_of_track)) == pytest.approx(np.pi / 2, abs=1e-9)
 
 
-
-
 def test_valid_runs_of_at_most_a_fifth_of_a_second_between_losses_are_fleeting():
     """At 30 fps, runs of up to 6 valid frames are fleeting, 7 are the sponge found again;
     a short run that the video's end cuts off is kept, one at its start is not."""
