@@ -17,6 +17,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from wipelab.logs.palette import REFERENCE_COLOUR
+from wipelab.mask_runs import true_runs
 
 #: Phase ticks (rad) and their labels.
 PHASE_TICKS = ((0.0, "0"), (0.5 * math.pi, "π/2"), (math.pi, "π"), (1.5 * math.pi, "3π/2"),
@@ -85,8 +86,7 @@ class PhaseChart:
         (a gap stays a gap)."""
         points = self.to_chart(phase, values)
         finite = np.isfinite(points).all(axis=1)
-        edges = np.flatnonzero(np.diff(np.concatenate([[0], finite.astype(int), [0]])))
-        return [points[a:b] for a, b in zip(edges[::2], edges[1::2]) if b - a > 1]
+        return [points[a:b] for a, b in true_runs(finite) if b - a > 1]
 
     @classmethod
     def bounds(cls) -> rrb.VisualBounds2D:

@@ -16,6 +16,7 @@ from matplotlib.figure import Figure
 
 from wipelab.logs.palette import (INPUT_COLOUR, LEARNED_COLOUR, MODE_COLOURS, OSCILLATOR_COLOURS,
                                   XYZ_COLOURS, hex_colour, segment_colour)
+from wipelab.mask_runs import true_runs
 
 INPUT, LEARNED = hex_colour(INPUT_COLOUR), hex_colour(LEARNED_COLOUR)
 #: Reference lines (F0, a true value) and truth: black on the white figures.
@@ -339,8 +340,7 @@ def _shade(ax, t: np.ndarray, mask: np.ndarray, colour: str, label: str) -> None
     if not mask.any():
         return
     half = 0.5 * float(np.median(np.diff(t))) if len(t) > 1 else 0.0
-    edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
-    for n, (start, stop) in enumerate(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1))):
+    for n, (start, stop) in enumerate(true_runs(mask)):
         ax.axvspan(t[start] - half, t[stop - 1] + half, color=colour, alpha=0.25, linewidth=0,
                    label=label if n == 0 else None)
 

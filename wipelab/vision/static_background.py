@@ -101,7 +101,7 @@ class StaticBackground:
         until the first :meth:`update` (:attr:`first`)."""
         self.image = np.median(images, axis=0).astype(np.float32)
         self._mean = None
-        if self.first is None and self.updates == 0:
+        if self.updates == 0:
             self.first = self.mean
         self.coloured = (2 * positive.sum(axis=0) >= len(positive)) & self.in_frame
         self.ghosts &= self.coloured

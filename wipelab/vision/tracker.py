@@ -28,6 +28,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from wipelab.mask_runs import true_runs
 from wipelab.vision.calibration import StereoCalibration
 from wipelab.vision.colour_model import ColourSource, LinearColourFeature
 from wipelab.vision.projection import invert_transform, transform_points
@@ -52,12 +53,9 @@ def fleeting_runs(valid: np.ndarray, fps: float, longest_s: float = FLEETING_RUN
     """The frames (bool mask, shape of ``valid``) of the runs of valid frames that last at
     most ``longest_s`` seconds at ``fps`` frames per second, except a run that the video's
     end cuts off (it may have gone on)."""
-    valid = np.asarray(valid, bool)
     longest = int(np.floor(longest_s * fps + 1e-9))
-    edges = np.diff(np.concatenate([[0], valid.astype(np.int8), [0]]))
-    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
     fleeting = np.zeros(len(valid), bool)
-    for start, end in zip(starts, ends):
+    for start, end in true_runs(valid):
         if end - start <= longest and end < len(valid):
             fleeting[start:end] = True
     return fleeting
