@@ -58,9 +58,42 @@ def test_a_gap_teaches_nothing_and_the_oscillator_runs_through_it():
                          waveform_rms_percent(y[last], clean[last]).max(), model.frequency_hz)
     frozen, deviation, waveform, frequency_hz = results["aware"]
     assert frozen == 0.0 and results["bridged"][0] > 1.0
-    assert deviation < 0.15 < 0.3 < results["bridged"][1]
+    assert deviation < 0.02 < 0.3 < results["bridged"][1]
     assert waveform < 1.6
     assert frequency_hz == pytest.approx(1.0, rel=3e-3)
+
+
+@pytest.mark.parametrize("gap_s", [(14.0, 15.1), (26.8, 27.9)])
+def test_the_centre_and_amplitude_are_not_learnt_from_a_period_that_spans_a_gap(gap_s):
+    """A 0.5 Hz circle not observed for 1.1 s: the last period of samples after the gap
+    covers some phases twice and misses others, and its mean is off the centre. Learnt from
+    it, g and r made the oscillator's frequency jump by 8-10 % after the gap (0.78 % off at
+    the end for a gap 2 s before it); held until a whole period has been seen, they keep
+    the frequency where it was."""
+    t = np.arange(0, 30, 1 / 30)
+    Y = 0.1 * np.column_stack([np.cos(np.pi * t), np.sin(np.pi * t)])
+    valid = ~((t >= gap_s[0]) & (t <= gap_s[1]))
+    model, history = learn_online(t, np.where(valid[:, None], Y, 0.0), OnlineParameters(),
+                                  valid=valid)
+    after = t > gap_s[1]
+    assert np.abs(history.fundamental_hz[after] / 0.5 - 1).max() < 0.005
+    assert model.frequency_hz == pytest.approx(0.5, rel=1e-3)
+
+
+@pytest.mark.parametrize("drift_m", [0.002, 0.006])
+def test_a_dof_that_only_drifts_does_not_pull_the_frequency(drift_m):
+    """A line wiped along x at 0.5 Hz (10 cm) while y only drifts by a few millimetres:
+    normalised by its own amplitude, y's drift was as large as the movement and pulled
+    the model's frequency 0.4-0.9 % off (a scene of the independent video generator: 27 %);
+    in units of at least half the reference's amplitude it weighs little."""
+    t = np.arange(0, 30, 1 / 30)
+    rng = np.random.default_rng(0)
+    Y = np.column_stack([0.1 * np.cos(np.pi * t),
+                         drift_m * np.sin(2 * np.pi * 0.04 * t + 1.0)
+                         + 0.0005 * rng.standard_normal(t.size)])
+    model, history = learn_online(t, Y, OnlineParameters(), reference_dof=0)
+    assert model.frequency_hz == pytest.approx(0.5, rel=1e-3)
+    assert history.hand_overs[-1] == 1
 
 
 def test_frames_dropped_here_and_there_do_not_keep_the_detector_from_locking():
@@ -88,7 +121,7 @@ def test_frames_dropped_here_and_there_do_not_keep_the_detector_from_locking():
 def test_follows_a_human_tempo_and_keeps_the_demonstrated_frequency():
     """60 s of a person's line strokes at 0.5 Hz (synth's motion model: tempo wandering by
     4 %): the model's frequency is within 1 % of 0.5 Hz, no change of tempo is found in the
-    wander. With the strong gain schedule (kappa = 100) and no supervisor the AFS drifts."""
+    wander. With the strong gain schedule (kappa = 100) and no supervisor the AFS strays."""
     t = np.arange(0, 60, 1 / 30)
     motion = WipingMotion(WipingMotionParams("line", 0.5, amplitude=0.14), 0.8, 0.03, seed=0)
     Y = motion.pose(t)[0][:, :2]
@@ -98,7 +131,7 @@ def test_follows_a_human_tempo_and_keeps_the_demonstrated_frequency():
     assert learner.tempo_changes == 0 and learner.hand_overs <= 2
     strong = OnlineParameters(relock_tolerance=None, afs=AFSParameters(residual_gain=100.0))
     _, drifting = learn_online(t, Y, strong, reference_dof=1)
-    assert drifting.fundamental_hz[-1] < 0.3
+    assert abs(drifting.fundamental_hz[-1] / 0.5 - 1) > 0.05
 
 
 @pytest.mark.parametrize("frequency_hz, factor", [(0.8, 1.3), (1.5, 1 / 1.3)])

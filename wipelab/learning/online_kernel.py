@@ -40,6 +40,9 @@ from wipelab.numba_cache import forget_stale_kernels
 
 AFS, AFO = 0, 1
 POSITIONS, LWR = 0, 1
+#: The canonical system's input is in units of each DOF's amplitude, but of no less than this
+#: share of the reference DOF's (:func:`_normalise_locked`).
+MIN_RELATIVE_SCALE = 0.5
 
 
 class KernelSettings(NamedTuple):
@@ -97,6 +100,8 @@ class LearnerState(NamedTuple):
     count: np.ndarray              # (1,) int64, samples so far
     valid_run: np.ndarray          # (1,) int64, valid samples since the last gap
     gap_run: np.ndarray            # (1,) int64, samples of the gap so far (0: observing)
+    anchor_run: np.ndarray         # (1,) int64, valid samples since the last gap longer than
+                                   # the bridge (the anchor's window is whole after a period)
     locked: np.ndarray             # (1,) int64, 1 once a period was handed over
     relock_until: np.ndarray       # (1,) time until which a change of tempo may re-lock (s)
     moving: np.ndarray             # (d,) bool, DOFs with r > 0
@@ -126,18 +131,34 @@ def canonical_fundamental(settings: KernelSettings, state: LearnerState) -> tupl
 
 
 @njit(cache=True)
-def _normalise_locked(state: LearnerState, y, offset: float, u) -> None:
-    """u = (y - g) / r + offset (0 + offset for a DOF that does not move)."""
+def _normalise_locked(state: LearnerState, y, offset: float, reference: int, u) -> None:
+    """u = (y - g) / max(r, r_ref / 2) + offset (0 + offset for a DOF that does not move).
+
+    Each DOF in units of its own amplitude, but of no less than half the reference DOF's: a
+    DOF that barely moves (a line wiped along x leaves y only its slow drift) stays small
+    and weighs little in the shared phase; in units of its own amplitude its drift would be as
+    large as the movement and pull Omega away."""
+    floor = MIN_RELATIVE_SCALE * state.amplitude[reference] if state.moving[reference] else 0.0
     for j in range(y.shape[0]):
-        u[j] = ((y[j] - state.goal[j]) / state.amplitude[j] if state.moving[j] else 0.0) + offset
+        r = max(state.amplitude[j], floor)
+        u[j] = ((y[j] - state.goal[j]) / r if state.moving[j] else 0.0) + offset
 
 
 @njit(cache=True)
 def _update_anchor(settings: KernelSettings, state: LearnerState, y, omega: float) -> None:
-    """g = mean, r = sqrt(2 variance) over the last period (r = 1 for a DOF that does not move)."""
+    """g = mean, r = sqrt(2 variance) over the last period (r = 1 for a DOF that does not move).
+
+    A period of samples that spans a gap covers some phases twice and misses others: its mean
+    is off the movement's centre by up to the amplitude. g and r then stay as they were until
+    a whole period has been observed since the gap (a gap the bridge carries does not count:
+    a tracker that drops a frame or a few here and there would freeze them for good)."""
     mean, variance = state.scratch[4], state.scratch[5]
     period_statistics(state.statistics, y, omega, settings.dt, settings.statistics_periods,
                       mean, variance)
+    period_samples = settings.statistics_periods * 2.0 * math.pi / (max(omega, 1e-12)
+                                                                     * settings.dt)
+    if state.statistics.count[0] > state.anchor_run[0] and state.anchor_run[0] < period_samples:
+        return
     for j in range(y.shape[0]):
         state.goal[j] = mean[j]
         spread = math.sqrt(2.0 * variance[j])
@@ -159,7 +180,7 @@ def _hand_over(settings: KernelSettings, state: LearnerState, y, period: float, 
     window = np.empty((count, y.shape[0]))
     for i in range(count):
         _normalise_locked(state, state.recent[(total - count + i) % capacity], settings.offset,
-                          window[i])
+                          settings.reference, window[i])
     omega, phase, alpha, beta = locked_series(window, dt, omega, settings.n_terms,
                                               settings.reference, settings.lock_search)
     # An Euler substep compares the input at its end with the series at its start phase, so a
@@ -198,7 +219,7 @@ def _observe(settings: KernelSettings, state: LearnerState, y) -> None:
     cosines, sines, drives = state.scratch[3], state.scratch[4], state.scratch[5]
     _update_anchor(settings, state, y, canonical_fundamental(settings, state)[1])
     if state.locked[0] == 1:
-        _normalise_locked(state, y, settings.offset, u)
+        _normalise_locked(state, y, settings.offset, settings.reference, u)
     else:
         running_normalise(state.range, y, state.count[0] == 0, settings.normaliser_rate,
                           settings.offset, u)
@@ -308,6 +329,8 @@ def learner_step(settings: KernelSettings, state: LearnerState, y, valid: bool) 
     if not valid:
         state.valid_run[0] = 0
         state.gap_run[0] += 1
+        if state.gap_run[0] > settings.bridge_samples:
+            state.anchor_run[0] = 0
         if settings.start_up and state.recent_count[0] > 0:
             if state.gap_run[0] <= settings.bridge_samples:
                 # a short gap (a frame or a few the tracker dropped): the detector, which
@@ -320,6 +343,7 @@ def learner_step(settings: KernelSettings, state: LearnerState, y, valid: bool) 
                 state.recent_count[0] = 0
     else:
         state.valid_run[0] += 1
+        state.anchor_run[0] += 1
         state.gap_run[0] = 0
         if settings.start_up:
             period = _detect(settings, state, y)

@@ -17,10 +17,13 @@ the movement changes. Measured in ``benchmarks/bench_learn.py``: on its clean si
 AFS with c_L = 0.5, kappa = 100 re-converges after a frequency step in 2.06-2.17 periods,
 the default in 2.05-2.11 (the change-of-tempo re-lock of :mod:`wipelab.learning.online`
 does the work). On the 27 human-like demonstrations (a wandering tempo, drifting amplitude
-and centre, two gaps) the residual stays large, the coupling grows and the AFS drifts to
-subharmonics: 6 of 27 model frequencies more than 1 % off (worst 11.9 %) with the
-supervisor, 10 (worst 88 %) without; with kappa = 30 all 27 within 0.94 %, without the
-schedule within 0.68 %. Robustness on people's movements decides: off. A weaker coupling
+and centre, two gaps) the schedule drifted to subharmonics while the online learner
+normalised its input wrongly (g and r learnt from a period spanning a gap; a DOF that barely
+moves in units of its own amplitude): 6 of 27 model frequencies more than 1 % off (worst
+11.9 %) with the supervisor, 10 (worst 88 %) without. With both fixed, all 27 are within
+0.38 % with kappa = 100, with or without the supervisor, 0.45 % with kappa = 30, 0.47 %
+without the schedule. It stays off: the re-lock already re-converges after a step, and the
+schedule has not been through the held-out tables (a)-(c). A weaker coupling
 alone (c_L = 0.7) smooths Omega after a lock (noise and drift make it wobble) but slows the
 re-convergence after a clean frequency step to 3.00-3.12 periods (the same table): off as
 well. Before the lock the schedule never applies.

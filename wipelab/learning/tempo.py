@@ -17,7 +17,7 @@ segment's mean before them by more than a factor 1 + ``change_threshold``, the s
 at the boundary where the change is found. Not retroactively at the first changed period:
 there the canonical phase was still catching up with the new tempo, and its offset from the
 person's phase biased the segment's mean for many periods (in development, some +-30 %
-steps never came within 1 %; on held-out demonstrations every one of 60 does within 2.6
+steps never came within 1 %; on held-out demonstrations every one of 60 does within 2.9
 periods: ``benchmarks/bench_learn.py``, table (b)). Before ``min_periods`` periods of the
 segment (and of data) exist, the fundamental of the last period stands in. The
 stroke-to-stroke wander of a person (a few percent) stays far below the threshold; a change
