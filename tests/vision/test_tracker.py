@@ -12,7 +12,8 @@ from wipelab.vision.calibration import load_calibration
 from wipelab.vision.colour_model import ColourSource, vivid_part
 from wipelab.vision.projection import invert_transform, transform_points
 from wipelab.vision.sponge_box import SpongeBox
-from wipelab.vision.tracker import SpongeTracker, TrackerParams, fleeting_runs
+from wipelab.vision.tracker import (SpongeTracker, TrackerParams, commonest_failure,
+                                    fleeting_runs)
 from wipelab.vision.undistortion import pinhole
 from wipelab.vision.video_io import StereoVideoReader
 
@@ -182,3 +183,20 @@ def test_valid_runs_of_at_most_a_fifth_of_a_second_between_losses_are_fleeting()
     assert np.array_equal(fleeting, expected)
     assert fleeting_runs(valid, fps=60.0)[20:27].all()   # 7 frames at 60 fps: 0.12 s
     assert not fleeting_runs(np.ones(5, bool), fps=30.0).any()
+
+
+def test_the_commonest_failure_is_named_in_a_users_terms():
+    """The reasons of frames that were not valid, counted by kind: the region tracker's
+    wording (with its numbers) becomes what a user can act on."""
+    reasons = ["left region 1.71x its usual area; right region 2.30x its usual area",
+               "right region 0.62x its usual area", "the cameras' regions disagree",
+               "searching", "left region 1.40x its usual area"]
+    kind, share = commonest_failure(reasons)
+    assert kind.startswith("the sponge's colour region kept changing size")
+    assert share == pytest.approx(0.6)
+    assert commonest_failure(["searching for the moving sponge", "left region not seen; "
+                              "right region not seen"]) == ("it was lost and not found again",
+                                                            1.0)
+    assert commonest_failure(["at the edge of the image"])[0] == \
+        "its colour region failed the tracker's checks"
+    assert commonest_failure([]) == ("", 0.0)

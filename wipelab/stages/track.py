@@ -58,7 +58,7 @@ from wipelab.vision.projection import invert_transform
 from wipelab.vision.sponge_box import CORNER_SIGNS, EDGES, SpongeBox, yaw_rotation
 from wipelab.vision.tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_MONO, QUALITY_NONE,
                                     FrameEstimate, SpongeTracker, TrackerParams,
-                                    fleeting_runs)
+                                    commonest_failure, fleeting_runs)
 from wipelab.vision.video_io import H264Writer, StereoVideoReader
 
 DEFAULT_COLOUR = "yellow"
@@ -248,10 +248,17 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
                                    fps=demo.reader.fps)
     with long_lived_objects():  # the libraries and the tracker: kept to the end
         tracker = SpongeTracker(demo.calibration, colour, tracker_params)
+    failures: list[str] = []   # why the tracking pass's frames were not valid
+
+    def remember_failure(_: int, estimate: FrameEstimate) -> None:
+        if not estimate.valid:
+            failures.append(estimate.reason)
+
     with tempfile.TemporaryDirectory(prefix="wipelab-track-") as workdir, opencv_on_one_thread():
         videos = LogVideos(demo, Path(workdir))
         try:
-            result = run_tracker(tracker, demo.reader, params, quiet, frame_sink=videos.write)
+            result = run_tracker(tracker, demo.reader, params, quiet, on_frame=remember_failure,
+                                 frame_sink=videos.write)
         finally:
             videos.close()
         if result is None and not tracker.region.frames_with_candidates:
@@ -263,10 +270,13 @@ def track(demo_dir: str | os.PathLike, out_dir: str | os.PathLike,
                              f"({colour.option}) moves like a wiping sponge in both cameras; "
                              "give the sponge's colour with --color, --hsv or --roi")
         if result is None:
+            kind, share = commonest_failure(failures)
             raise InputError(f"{demo.left}, {demo.right}: a sponge of this colour "
                              f"({colour.option}) was found but could be followed in fewer than "
-                             "two frames; give the sponge's colour more closely with --hsv or "
-                             "--roi")
+                             f"two frames: in {share:.0%} of the frames, {kind}. Things of the "
+                             "sponge's colour where it wipes (a cloth, a plate) do this; if "
+                             "their shade differs from the sponge's, give the sponge's colour "
+                             "more closely with --hsv or --roi")
         _write_outputs(demo, out_dir, params, colour, tracker, tracker_params, result, videos,
                        quiet)
     return result

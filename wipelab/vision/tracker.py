@@ -39,6 +39,7 @@ from wipelab.vision.sponge_box import SpongeBox
 from wipelab.vision.table_plane import table_axes
 
 __all__ = ["TrackerParams", "FrameEstimate", "SpongeTracker", "fleeting_runs",
+           "commonest_failure",
            "QUALITY_BOX", "QUALITY_CENTROID", "QUALITY_MONO", "QUALITY_NONE"]
 
 #: A run of valid frames between losses that lasts at most this long (seconds) is a fleeting
@@ -59,6 +60,34 @@ def fleeting_runs(valid: np.ndarray, fps: float, longest_s: float = FLEETING_RUN
         if end - start <= longest and end < len(valid):
             fleeting[start:end] = True
     return fleeting
+
+
+#: Why frames were not valid, by words of the region tracker's reasons, in the terms a user
+#: can act on (the first that matches a reason names it).
+FAILURE_KINDS = (
+    ("usual area", "the sponge's colour region kept changing size (a thing of its colour "
+                   "joining it, or the hand hiding it)"),
+    ("another size", "the sponge's colour region was of another size in each camera"),
+    ("disagree", "the two cameras' regions of its colour did not show one thing"),
+    ("has not moved", "what was followed stood still"),
+    ("search", "it was lost and not found again"),
+    ("not seen", "it was lost and not found again"),
+)
+
+
+def commonest_failure(reasons) -> tuple[str, float]:
+    """The commonest kind of failure among the reasons of frames that were not valid (any
+    iterable of strings; :data:`FAILURE_KINDS`, else "its colour region failed the tracker's
+    checks") and its share of them (0 to 1; ("", 0.0) for none)."""
+    counts: dict[str, int] = {}
+    for reason in reasons:
+        kind = next((text for words, text in FAILURE_KINDS if words in reason),
+                    "its colour region failed the tracker's checks")
+        counts[kind] = counts.get(kind, 0) + 1
+    if not counts:
+        return "", 0.0
+    kind = max(counts, key=lambda key: (counts[key], key))
+    return kind, counts[kind] / sum(counts.values())
 
 
 @dataclass(frozen=True)
