@@ -7,6 +7,9 @@ reports on the held-out ones."""
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -28,8 +31,15 @@ SEEDS = (4, 5, 7)
 
 @pytest.fixture(scope="module")
 def scenes(tmp_path_factory):
+    """The scenes, each rendered in a fresh process: rendered in this one, after hundreds of
+    other tests, one camera's video has differed from run to run (the cause is not found),
+    and with it seed 5's shape RMS (4.66 mm as a fresh process renders it, 5.30 mm once)."""
     root = tmp_path_factory.mktemp("unseen")
-    return {seed: render_scene(root / f"s{seed}", seed, small=True) for seed in SEEDS}
+    for seed in SEEDS:
+        subprocess.run([sys.executable, "-m", "tests.stereo_scenes", str(root / f"s{seed}"),
+                        "--seed", str(seed), "--small"], check=True, capture_output=True,
+                       cwd=Path(__file__).resolve().parents[2])
+    return {seed: root / f"s{seed}" for seed in SEEDS}
 
 
 def _truth(scene):
