@@ -14,7 +14,7 @@ from click.testing import CliRunner
 
 from tests.stereo_scenes import render_scene
 from wipelab.cli import cli
-from wipelab.logs import mcap_topics, read_mcap_scalars, rrd_blueprint_views
+from wipelab.logs import mcap_topics, read_mcap_scalars, read_mcap_topic, rrd_blueprint_views
 from wipelab.model_file import read_model
 from wipelab.pipeline.recordings import rerun_program
 from wipelab.trajectory_csv import read_trajectory
@@ -101,6 +101,13 @@ def test_live_writes_the_batch_stages_files_and_its_logs(scene, session):
     verified = subprocess.run([rerun_program(), "rrd", "verify", str(session / "live.rrd")],
                               capture_output=True, text=True)
     assert verified.returncode == 0, verified.stderr
+    # the track's frame has a place in the robot's world from the start (provisional, from the
+    # first tracked point), then the demonstration area's once the learner has locked
+    placed = [t for t, message in read_mcap_topic(session / "live.mcap", "/tf")
+              for transform in message["transforms"]
+              if transform["child_frame_id"] == "demonstration"]
+    assert len(placed) == 2 and placed[0] == 0
+    assert placed[1] / 1e9 == pytest.approx(imitation["lock_s"], abs=0.1)
 
 
 def test_the_other_commands_take_over_from_a_live_session(session, tmp_path):

@@ -10,7 +10,9 @@ Topics (MCAP topic = Rerun entity; time = the session's, seconds from the first 
   the frame ``demonstration`` (the demo's world, or its left camera's frame), which ``/tf``
   places in the robot's world once the demonstration area is known: the area's centre on
   the robot's wiping centre, the tracked sponge's median height on the surface. So the
-  3D view shows the person's sponge under the robot's hand. ``/track/position`` (m),
+  3D view shows the person's sponge under the robot's hand. Before, from the session's
+  start, the first tracked point stands for the area's centre (a frame without a place
+  made the viewer mark the 3D view with an error until the area was known). ``/track/position`` (m),
   ``/track/quality`` (a state), ``/track/demonstration_area`` (JSON and outline);
 * imitation learning, from the lock on: ``/oscillators/frequency_hz``,
   ``/oscillators/fundamental_hz``, ``/oscillators/model_frequency_hz`` (the frequency
@@ -211,6 +213,7 @@ class LiveLog:
         self.logged_segments = 0
         self.hand: np.ndarray | None = None   # the last logged hand position (1, 3)
         self.area_logged = False
+        self.placed = False   # whether the frame demonstration has a place in the world
         self.heights: list[float] = []        # tracked sponge z (m, track frame)
         self.series = {
             "/track/position": _Series(["x", "y", "z"]),
@@ -282,6 +285,8 @@ class LiveLog:
         if estimate.valid:
             self.series["/track/position"].add(t, estimate.pose[:3])
             self.heights.append(float(estimate.pose[2]))
+            if not self.placed:   # from the session's start, until the area is known
+                self._place(0.0, estimate.pose[:2], float(estimate.pose[2]))
         quality = LOST if estimate.quality == QUALITY_NONE else estimate.quality
         if quality != self.quality:
             rec.states("/track/quality", [t], [quality], {quality: QUALITY_COLOURS[quality]})
@@ -326,10 +331,16 @@ class LiveLog:
         rec.line_strip3d("/track/demonstration_area/outline", t,
                          np.column_stack([rectangle, np.full(5, height)]), color=AREA_COLOUR,
                          frame_id=DEMONSTRATION_FRAME)
-        translation, rotation = self.robot.demonstration_pose(area.centre, height,
+        self._place(t, area.centre, height)
+
+    def _place(self, t: float, centre, height: float) -> None:
+        """Place the frame ``demonstration`` in the robot's world from ``t`` on: the point
+        ``centre`` (2,) at ``height`` (m, track frame) on the surface at the wiping centre."""
+        translation, rotation = self.robot.demonstration_pose(centre, height,
                                                               self.scene.R_track_table)
-        rec.transforms(t, [("world", DEMONSTRATION_FRAME, translation,
-                            quaternion_xyzw_from_rotation(rotation))])
+        self.rec.transforms(t, [("world", DEMONSTRATION_FRAME, translation,
+                                 quaternion_xyzw_from_rotation(rotation))])
+        self.placed = True
 
     def _robot_slice(self, start: int, stop: int) -> None:
         trace = self.robot.trace_arrays(start, stop)
