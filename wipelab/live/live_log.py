@@ -12,8 +12,9 @@ Topics (MCAP topic = Rerun entity; time = the session's, seconds from the first 
   the robot's wiping centre, the tracked sponge's median height on the surface. So the
   3D view shows the person's sponge under the robot's hand. Before, from the session's
   start, the first tracked point stands for the area's centre (a frame without a place
-  made the viewer mark the 3D view with an error until the area was known). ``/track/position`` (m),
-  ``/track/quality`` (a state), ``/track/demonstration_area`` (JSON and outline);
+  made the viewer mark the 3D view with an error until the area was known).
+  ``/track/position`` (m), ``/track/quality`` (a state), ``/track/demonstration_area``
+  (JSON and outline);
 * imitation learning, from the lock on: ``/oscillators/frequency_hz``,
   ``/oscillators/fundamental_hz``, ``/oscillators/model_frequency_hz`` (the frequency
   converging), ``/live/imitation/<dof>``: the demonstrated movement, the learned one (the
