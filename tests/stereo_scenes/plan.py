@@ -3,7 +3,8 @@
 Each group of factors draws from its own generator (``default_rng([seed, group])``), so
 overriding one factor leaves the others of the same seed as they were. Overrides (keyword
 arguments of :func:`plan_scene`) replace a drawn value: ``pattern``, ``frequency_hz``,
-``across``, ``colour``, ``two_tone``, ``table_texture``, ``codec``, ``fps``, ``image_size``,
+``across``, ``colour``, ``body_hue`` (the sponge body's OpenCV hue, 0-179, also outside its
+colour's named range, as a user's sponge under their light may be), ``two_tone``, ``table_texture``, ``codec``, ``fps``, ``image_size``,
 ``hfov_deg``, ``k1``, ``baseline``, ``distance``, ``elevation_deg``, ``azimuth_deg``,
 ``exposure_s``, ``noise_grey``, ``write_T_world_left``.
 """
@@ -265,7 +266,8 @@ def _hue_inside(name: str, rng) -> float:
 def plan_sponge(rng, o: _Overrides) -> Sponge:
     colour = o.get("colour", lambda: str(rng.choice(list(NAMED_HSV))))
     (_, s0, v0), _ = NAMED_HSV[colour]
-    hsv = (_hue_inside(colour, rng), rng.uniform(max(s0 + 45, 160), 250),
+    hue = _hue_inside(colour, rng)  # drawn even when overridden: the other draws stay the same
+    hsv = (float(o.get("body_hue", lambda: hue)) % 180, rng.uniform(max(s0 + 45, 160), 250),
            rng.uniform(max(v0 + 70, 165), 245))
     length = rng.uniform(0.07, 0.15)
     width = rng.uniform(0.045, min(0.10, 0.9 * length))
