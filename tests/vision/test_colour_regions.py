@@ -6,7 +6,8 @@ import cv2
 import numpy as np
 
 from wipelab.vision.colour_model import NAMED_COLOURS
-from wipelab.vision.colour_regions import blob_mask, find_blobs, prior_model, region_moments
+from wipelab.vision.colour_regions import (blob_mask, find_blobs, hue_range, prior_model,
+                                           region_moments, spanning_hues, widened_hues)
 
 
 def _bgr(h, s, v):
@@ -31,6 +32,45 @@ def test_prior_of_red_wraps_through_hue_zero():
     image = np.array([[_bgr(176, 220, 200), _bgr(2, 220, 200), _bgr(90, 220, 200)]])
     p = model.back_project(image)[0]
     assert p[0] > 0.9 and p[1] > 0.9 and p[2] == 0.0
+
+
+def test_a_box_spans_the_hues_a_sponge_shows_only_where_they_reach_beyond_it():
+    yellow = NAMED_COLOURS["yellow"]  # H 20-34
+    assert spanning_hues(yellow, 24, 31, 2.0) == yellow            # inside: as it is
+    assert spanning_hues(yellow, 29, 37, 2.0).high[0] == 39        # beyond the top, + 2
+    assert spanning_hues(yellow, 29, 37, 2.0).low == yellow.low
+    grown = spanning_hues(yellow, 16, 40, 2.0)
+    assert grown.low[0] == 14 and grown.high[0] == 42
+    red = NAMED_COLOURS["red"]  # H 172-6, through 0
+    assert spanning_hues(red, 176, 182, 2.0) == red                # 182 is hue 2: inside
+    wrapped = spanning_hues(red, 165, 190, 1.0)
+    assert (wrapped.low[0], wrapped.high[0]) == (164, 11)
+    assert widened_hues(yellow, 6).low[0] == 14 and widened_hues(yellow, 6).high[0] == 40
+    assert widened_hues(red, 6).low[0] == 166 and widened_hues(red, 6).high[0] == 12
+    assert widened_hues(yellow, 100).low[0] == 0 and widened_hues(yellow, 100).high[0] == 179
+    above, below = widened_hues(yellow, 6, +1), widened_hues(yellow, 6, -1)
+    assert (above.low[0], above.high[0]) == (20, 40) and (below.low[0], below.high[0]) == (14, 34)
+
+
+def test_the_hue_range_of_a_region_is_measured_on_the_hue_circle():
+    hues = np.array([[176, 178, 179, 0, 1, 3, 5, 90]], np.uint8)  # the last one is masked out
+    image = cv2.cvtColor(np.dstack([hues, np.full_like(hues, 200), np.full_like(hues, 200)]),
+                         cv2.COLOR_HSV2BGR)
+    mask = np.array([[255] * 7 + [0]], np.uint8)
+    low, high = hue_range([image], [mask], near=179.0, share=0.0)
+    assert abs(low - 176) <= 1 and abs(high - 185) <= 1            # 176 .. 5 (= 185)
+    assert hue_range([image], [np.zeros_like(mask)], near=0.0) is None
+    grown = spanning_hues(NAMED_COLOURS["red"], low, high, 0.0)
+    assert grown == NAMED_COLOURS["red"]  # hues 176 .. 5 lie inside red (172 .. 6)
+
+
+def test_a_sponge_between_two_named_colours_reads_as_one_once_the_box_spans_it():
+    """A lemon-yellow sponge (hue 37, between yellow 20-34 and green 38-85): the prior of
+    yellow hardly reads it; yellow spanned to the hues it shows reads it whole."""
+    yellow = NAMED_COLOURS["yellow"]
+    lemon = np.array([[_bgr(h, 220, 210) for h in (36, 37, 38, 39)]])
+    assert prior_model(yellow).back_project(lemon).max() < 0.5
+    assert prior_model(spanning_hues(yellow, 36, 39, 2.0)).back_project(lemon).min() > 0.95
 
 
 def test_blob_centroid_is_sub_pixel_and_regions_are_separated():

@@ -59,6 +59,10 @@ from wipelab.trajectory_csv import write_trajectory
 from wipelab.vision.tracker import SpongeTracker, TrackerParams
 
 SPEEDS = ("1", "max")
+#: Seconds of searching for the sponge of the named colour after which live searches a
+#: little above it as well, then a little below it (the track stage's later passes, on line:
+#: a sponge whose colour lies between two names).
+WIDEN_AFTER_S = ((+1, 10.0), (-1, 20.0))
 
 
 @dataclass(frozen=True)
@@ -138,6 +142,7 @@ class _Session:
                  params: LiveParams, log: LiveLog, requests: StopRequests, quiet: bool):
         self.feed, self.tracker, self.robot, self.params = feed, tracker, robot, params
         self.fps = feed.fps
+        self.widenings = 0  # of WIDEN_AFTER_S, done
         self.imitation = Imitation(self.fps, params.imitation)
         self.log, self.requests, self.quiet = log, requests, quiet
         self.scene_known = False
@@ -180,6 +185,10 @@ class _Session:
         for index in range(len(self.rows), pair.index):    # dropped by the frame buffer
             self._advance(index, np.full(4, np.nan), False, "")
             self.log.dropped(index / self.fps)
+        while not self.tracker.identified and self.widenings < len(WIDEN_AFTER_S) and \
+                pair.index >= WIDEN_AFTER_S[self.widenings][1] * self.fps:
+            self.tracker.widen_colour(WIDEN_AFTER_S[self.widenings][0])
+            self.widenings += 1
         estimate = self.tracker.step(pair.left, pair.right)
         if self.tracker.ready and not self.scene_known:
             self.scene_known = True   # draw the sponge at its size and turn from now

@@ -329,7 +329,9 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
     frames were valid.
 
     Two passes: a warm-up over the first ``params.warmup`` seconds (longer until the sponge
-    is found and the plane it moves in is known), then, with what it learnt, the tracking
+    is found and the plane it moves in is known; when a whole warm-up pass finds nothing of
+    the named colour, it is searched for again a little above that colour, then a little
+    below it, then with any motion accepted), then, with what it learnt, the tracking
     pass from the first frame (so that the first seconds are tracked too); the frames before
     that pass's first valid one are then followed backwards from it
     (:func:`track_backwards`). Runs of valid frames too short to be the sponge are then
@@ -345,7 +347,17 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
     m = params.logged_particles
     particles = np.full((n, m, 4), np.nan)
     least = int(round(params.warmup * reader.fps))
-    for attempt in range(2):
+    # what a pass that finds nothing leaves for the next: a sponge whose colour lies between
+    # two names (a lemon yellow named yellow, a golden orange), one side of the named colour
+    # at a time; then, for a video too short for the wiping to show as periodic motion, any
+    # motion of the named colour
+    for attempt, (side, any_motion) in enumerate(((0, False), (+1, False), (-1, False),
+                                                  (0, True))):
+        if attempt:
+            tracker.widen_colour(side)
+            if any_motion:
+                tracker.accept_any_motion()
+            tracker.restart()
         with tqdm(total=n, desc="track: finding the sponge", unit="frame", disable=quiet,
                   file=sys.stderr, leave=False) as bar:
             for k, (left, right) in enumerate(reader):
@@ -355,9 +367,6 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
                     break
         if tracker.identified:
             break
-        # a video too short for the wiping to show as periodic motion: any motion will do
-        tracker.accept_any_motion()
-        tracker.restart()
     if not tracker.identified:
         return None
     tracker.restart()

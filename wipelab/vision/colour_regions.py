@@ -4,9 +4,12 @@ connected regions (blobs) of a colour probability image with sub-pixel centroids
 The named colours of :data:`~wipelab.vision.colour_model.NAMED_COLOURS` are boxes in HSV.
 A real sponge's body drifts out of such a box under coloured light and shading, so the
 prior is soft: full inside the box, falling off over a few hue and saturation units outside.
-Once the tracker has found the sponge it learns its own colour model from the sponge's
-pixels (:meth:`~wipelab.vision.colour_model.ColourModel.fit`), bounded by the prior: the
-sponge's body is of the named colour, a table of a neighbouring hue is not.
+A name is a hint: a sponge between two names (a lemon yellow, a golden orange) shows in the
+box grown a little to one side (:func:`widened_hues`), and once found, the box spans the
+hues its own pixels show beyond it (:func:`spanning_hues` of :func:`hue_range`). The tracker
+then learns the sponge's own colour model from its pixels
+(:meth:`~wipelab.vision.colour_model.ColourModel.fit`), bounded by that prior: the sponge's
+body is of the named colour as the sponge shows it, a table of a neighbouring hue is not.
 """
 
 from __future__ import annotations
@@ -23,6 +26,61 @@ from wipelab.vision.colour_model import H_BINS, S_BINS, ColourModel, HsvRange
 HUE_MARGIN, SATURATION_MARGIN = 5.0, 30.0
 
 
+def hue_centre(colour: HsvRange) -> float:
+    """The middle of the box's hue range on the hue circle (OpenCV units)."""
+    return _hue_centre_and_half(colour)[0]
+
+
+def _hue_centre_and_half(colour: HsvRange) -> tuple[float, float]:
+    """Centre and half-width of the box's hue range on the hue circle (OpenCV units)."""
+    low, high = colour.low[0], colour.high[0]
+    centre = 0.5 * (low + high) if low <= high else (0.5 * (low + high + 180.0)) % 180.0
+    return centre, 0.5 * ((high - low) % 180.0)
+
+
+def _with_hues(colour: HsvRange, low: float, high: float) -> HsvRange:
+    """``colour`` with the hue range [low, high] (on the circle: numbers outside 0-179 wrap,
+    rounded outwards; the whole circle when it spans it)."""
+    if high - low >= 179.0:
+        low, high = 0.0, 179.0
+    return HsvRange((int(np.floor(low)) % 180,) + colour.low[1:],
+                    (int(np.ceil(high)) % 180,) + colour.high[1:])
+
+
+def widened_hues(colour: HsvRange, units: float, side: int = 0) -> HsvRange:
+    """The box with its hue range grown by ``units`` above it (``side`` +1), below it (-1) or
+    on both sides (0): a sponge whose colour lies between two named colours (a lemon yellow,
+    a golden orange) shows in it."""
+    centre, half = _hue_centre_and_half(colour)
+    return _with_hues(colour, centre - half - (units if side <= 0 else 0.0),
+                      centre + half + (units if side >= 0 else 0.0))
+
+
+def spanning_hues(colour: HsvRange, low: float, high: float, margin: float) -> HsvRange:
+    """The box grown where the hues [low, high] (OpenCV units, on the circle) reach beyond it,
+    to hold them and ``margin`` more: the named colour as this sponge shows it. Hues inside
+    the box leave it as it is."""
+    centre, half = _hue_centre_and_half(colour)
+    start = (low - centre + 90.0) % 180.0 - 90.0   # circular, relative to the box's centre
+    end = start + (high - low) % 180.0
+    return _with_hues(colour, centre + (start - margin if start < -half else -half),
+                      centre + (end + margin if end > half else half))
+
+
+def hue_range(images_bgr: list[np.ndarray], masks: list[np.ndarray], near: float,
+              share: float = 0.05) -> tuple[float, float] | None:
+    """The ``share`` and 1 - ``share`` quantiles (OpenCV units) of the hues of the pixels of
+    ``masks`` (0/255) in ``images_bgr``, on the hue circle around ``near`` (the second may be
+    past 179: the range wraps); None when the masks hold no pixel."""
+    offsets = [(cv2.cvtColor(image, cv2.COLOR_BGR2HSV)[..., 0][mask > 0].astype(np.float64)
+                - near + 90.0) % 180.0 - 90.0 for image, mask in zip(images_bgr, masks)]
+    offsets = np.concatenate(offsets) if offsets else np.zeros(0)
+    if not offsets.size:
+        return None
+    low, high = np.quantile(offsets, [share, 1.0 - share])
+    return float(near + low) % 180.0, float(near + low) % 180.0 + float(high - low)
+
+
 def prior_model(colour: HsvRange, hue_margin: float = HUE_MARGIN,
                 saturation_margin: float = SATURATION_MARGIN) -> ColourModel:
     """A colour model that reads 1 inside the HSV box ``colour`` and falls off linearly to 0
@@ -30,9 +88,7 @@ def prior_model(colour: HsvRange, hue_margin: float = HUE_MARGIN,
     60 % of the box's lowest value are never sponge)."""
     hue = (np.arange(H_BINS) + 0.5) * 180.0 / H_BINS
     saturation = (np.arange(S_BINS) + 0.5) * 256.0 / S_BINS
-    low, high = colour.low[0], colour.high[0]
-    centre = 0.5 * (low + high) if low <= high else (0.5 * (low + high + 180.0)) % 180.0
-    half = 0.5 * ((high - low) % 180.0)
+    centre, half = _hue_centre_and_half(colour)
     distance = np.abs((hue - centre + 90.0) % 180.0 - 90.0)  # circular hue distance
     hue_membership = np.clip(1.0 - (distance - half) / hue_margin, 0.0, 1.0)
     saturation_membership = np.clip(

@@ -37,7 +37,9 @@ from wipelab.vision.acquisition import (AcquisitionParams, CandidateTrack, Candi
                                         StereoCandidate, stereo_candidates, triangulate_rays)
 from wipelab.vision.calibration import StereoCalibration
 from wipelab.vision.colour_model import ColourModel, ColourSource, vivid_part
-from wipelab.vision.colour_regions import blob_mask, find_blobs, prior_model, region_moments
+from wipelab.vision.colour_regions import (blob_mask, find_blobs, hue_centre, hue_range,
+                                           prior_model, region_moments, spanning_hues,
+                                           widened_hues)
 from wipelab.vision.projection import invert_transform
 from wipelab.vision.static_background import StaticBackground
 from wipelab.vision.table_plane import Plane, fit_plane, points_on_plane
@@ -58,6 +60,15 @@ USUAL_AREA_FRAMES = 5
 #: Until the usual region areas are known, a frame is valid only when the two cameras'
 #: regions (square metres at the sponge's distance) agree within this factor.
 FIRST_AREAS_AGREEMENT = 1.6
+#: Once found, the hues of the sponge's vivid pixels (5th to 95th percentile) are of its
+#: colour, also where they reach beyond the named colour's box: there with this many OpenCV
+#: hue units (0-179) more.
+SPONGE_HUE_MARGIN = 2.0
+#: ... measured at most this many times (each with the sponge's region by the range so far).
+SPONGE_HUE_ROUNDS = 3
+#: A search widened beyond the named colour (:meth:`RegionTracker.widen_search`) takes hues
+#: this far beyond its box.
+SEARCH_HUE_WIDENING = 6.0
 
 
 @dataclass(frozen=True)
@@ -236,7 +247,13 @@ class RegionTracker:
         search_scale = min(1.0, params.search_width / max(size))
         self.backgrounds = [StaticBackground(view.undistorter, search_scale)
                             for view in self.views]
-        self.prior = prior_model(colour.hsv_range) if colour.hsv_range is not None else None
+        #: the colour the user named (or the range given), None for a region (``--roi``)
+        self.named = colour.hsv_range
+        self.named_hue = hue_centre(self.named) if self.named is not None else 0.0
+        #: the colour searched for, then (once the sponge is found) the named colour as the
+        #: sponge shows it: what the learnt colour is bounded by
+        self.prior = prior_model(self.named) if self.named is not None else None
+        self.spanned = self.named  # the box of the prior
         self.model: ColourModel | None = None  # the sponge's vivid body: what is tracked
         #: the colour of all the sponge's faces, lit and shaded (what a box model's outline
         #: is scored on)
@@ -285,6 +302,17 @@ class RegionTracker:
     def identified(self) -> bool:
         """Whether the sponge has been found (its colour, size and plane are known)."""
         return self.size is not None
+
+    def widen_search(self, side: int) -> None:
+        """Search for a sponge whose colour lies up to :data:`SEARCH_HUE_WIDENING` hue units
+        above (``side`` +1) or below (-1) the named colour's box as well, between two names
+        (a lemon yellow, a golden orange); 0: the named colour again. The track stage asks
+        after a whole pass found nothing of the named colour: one side at a time, so that
+        what lies on the other (a wooden table below a lemon yellow) stays out."""
+        if self.named is not None and not self.identified:
+            self.spanned = widened_hues(self.named, SEARCH_HUE_WIDENING, side) if side \
+                else self.named
+            self.prior = prior_model(self.spanned)
 
     def restart(self) -> None:
         """Forget the track but keep what was learnt about the sponge and the scene (for a
@@ -439,7 +467,11 @@ class RegionTracker:
             return False
         # the candidate's region again, without what stayed still: nothing left means it
         # was a still thing that the sponge (or an arm) touched
-        self.size, self.model = track.size, self.prior
+        self.size = track.size
+        searched = (self.spanned, self.prior)
+        if self.named is not None:
+            self._span_the_named_colour(frames, track.last_point)
+        self.model = self.prior
         rays, areas = [], []
         for view, frame, background in zip(self.views, frames, self.backgrounds):
             region = self._region(view, frame, track.last_point, 0.02, background)
@@ -451,13 +483,45 @@ class RegionTracker:
             self.candidates.static[track.ident] = (track.last_point.copy(), track.size)
             self.candidates.tracks = [t for t in self.candidates.tracks if t is not track]
             self.size = self.model = None
+            self.spanned, self.prior = searched
             return False
         for recent in self._recent:
             recent.clear()
         point = triangulate_rays(rays[0][None], rays[1][None], self.calibration.R,
                                  self.calibration.T)[0][0]
         self.size = float(np.sqrt(np.mean(areas)))
-        masks, cores, windows = [], [], []
+        windows, masks, cores = self._seed_regions(frames, point)
+        self.body_model = self._colour(windows, cores, masks)
+        # the region's centre is measured on its vivid part: what else the region holds (a
+        # duller hand, the sponge's shaded sides) is neither sponge nor background
+        self.model = self._colour(windows, [vivid_part(window, core) for window, core
+                                            in zip(windows, cores)], masks, unsure=masks)
+        self.history.append((self.frame - 1, point.copy()))
+        self.seed_windows, self.seed_masks = windows, masks
+        self._table_centre = point.copy()
+        self._measure_table(None if self._table_points else frames)
+        return True
+
+    def _span_the_named_colour(self, frames, point: np.ndarray) -> None:
+        """The prior becomes the named colour as the sponge at ``point`` shows it: a sponge
+        whose hue lies at the edge of its name, or between two names, is whole in it. Its
+        pixels beyond the prior are not in its region at first: measured again (at most
+        :data:`SPONGE_HUE_ROUNDS` times) until the range stays."""
+        for _ in range(SPONGE_HUE_ROUNDS):
+            windows, masks, _ = self._seed_regions(frames, point)
+            hues = hue_range(windows, [vivid_part(window, mask) for window, mask
+                                       in zip(windows, masks)], self.named_hue)
+            if hues is None:
+                return
+            spanned = spanning_hues(self.named, *hues, SPONGE_HUE_MARGIN)
+            if spanned == self.spanned:
+                return
+            self.spanned, self.prior = spanned, prior_model(spanned)
+
+    def _seed_regions(self, frames, point: np.ndarray):
+        """The sponge's pixels at ``point`` in both cameras, by the prior: (windows (BGR),
+        region masks, core masks (0/255): the region's pixels well inside the prior's box)."""
+        windows, masks, cores = [], [], []
         for view, frame, background in zip(self.views, frames, self.backgrounds):
             window, origin, _ = self._window(view, frame, point, 1.5 * self.size)
             probability = self.prior.back_project(window)
@@ -474,16 +538,7 @@ class RegionTracker:
             # the soft edge of the prior may take in a hand of a near hue
             cores.append((region & (probability > 0.99)).astype(np.uint8) * 255)
             windows.append(window)
-        self.body_model = self._colour(windows, cores, masks)
-        # the region's centre is measured on its vivid part: what else the region holds (a
-        # duller hand, the sponge's shaded sides) is neither sponge nor background
-        self.model = self._colour(windows, [vivid_part(window, core) for window, core
-                                            in zip(windows, cores)], masks, unsure=masks)
-        self.history.append((self.frame - 1, point.copy()))
-        self.seed_windows, self.seed_masks = windows, masks
-        self._table_centre = point.copy()
-        self._measure_table(None if self._table_points else frames)
-        return True
+        return windows, masks, cores
 
     def _colour(self, windows, cores, masks, unsure=None) -> ColourModel:
         """The colour model of the sponge's pixels ``cores`` in both cameras' windows (of its

@@ -207,6 +207,12 @@ class SpongeTracker:
             region.params.acquisition, min_periodicity=0.0))
         region.candidates.params = region.params.acquisition
 
+    def widen_colour(self, side: int) -> None:
+        """Search for a sponge whose colour lies a little above (``side`` +1) or below (-1)
+        the named one too, between two names (0: the named colour again;
+        :meth:`RegionTracker.widen_search`)."""
+        self.region.widen_search(side)
+
     def restart(self) -> None:
         """Forget the track, keep what was learnt (for a second pass from the video's start)."""
         self.region.restart()
