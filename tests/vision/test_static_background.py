@@ -223,3 +223,19 @@ def test_until_the_sponge_is_tracked_a_still_thing_must_look_as_the_scene_first_
     background.update(resting, (model,), [], GHOST)
     still_now = background.still_in_canvas_image(background.canvas_image(resting))
     assert still_now[sponge].mean() > 0.9            # tracked: the running median
+
+
+def test_the_still_scene_near_a_point_is_the_median_without_the_sponge_that_passed():
+    """:meth:`median_near` gives the still scene in a square round a point: the cloth there,
+    not the sponge that wiped over it; at the canvas's edge only the pixels inside it."""
+    rng = np.random.default_rng(3)
+    background = _background()
+    model = prior_model(NAMED_COLOURS["cyan"])
+    images = np.stack([background.canvas_image(_frame(t, rng)[0]) for t in range(30)])
+    background.initialise(images, np.stack([model.back_project(i) > 0.5 for i in images]))
+    on_the_cloth = background.median_near(np.array([80.0, 70.0]), 20.0)
+    assert on_the_cloth.shape == (40 * 40, 1, 3)
+    assert np.abs(on_the_cloth.astype(int) - CLOTH).max() <= 6
+    corner = background.in_frame[:10, :10]   # the canvas's rim sees no frame pixel
+    assert 0 < np.count_nonzero(corner) < corner.size
+    assert len(background.median_near(np.array([0.0, 0.0]), 10.0)) == np.count_nonzero(corner)

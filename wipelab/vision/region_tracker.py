@@ -66,6 +66,12 @@ FIRST_AREAS_AGREEMENT = 1.6
 SPONGE_HUE_MARGIN = 2.0
 #: ... measured at most this many times (each with the sponge's region by the range so far).
 SPONGE_HUE_ROUNDS = 3
+#: ... but not grown where that would make more than this share of the still scene around the
+#: sponge (the backgrounds' median, :data:`SPAN_CHECK_REACH` around it) of its colour: a
+#: table whose hue lies next to the sponge's, which the sponge's own pixels reach into.
+SPAN_SURROUNDINGS = 0.05
+#: Half side of the square around the sponge that :data:`SPAN_SURROUNDINGS` looks at, metres.
+SPAN_CHECK_REACH = 2 * LARGEST_SPONGE
 #: A search widened beyond the named colour (:meth:`RegionTracker.widen_search`) takes hues
 #: this far beyond its box.
 SEARCH_HUE_WIDENING = 6.0
@@ -506,7 +512,8 @@ class RegionTracker:
         """The prior becomes the named colour as the sponge at ``point`` shows it: a sponge
         whose hue lies at the edge of its name, or between two names, is whole in it. Its
         pixels beyond the prior are not in its region at first: measured again (at most
-        :data:`SPONGE_HUE_ROUNDS` times) until the range stays."""
+        :data:`SPONGE_HUE_ROUNDS` times) until the range stays; a range that would make the
+        still scene round the sponge (a table of a near hue) its colour is not taken."""
         for _ in range(SPONGE_HUE_ROUNDS):
             windows, masks, _ = self._seed_regions(frames, point)
             hues = hue_range(windows, [vivid_part(window, mask) for window, mask
@@ -516,7 +523,24 @@ class RegionTracker:
             spanned = spanning_hues(self.named, *hues, SPONGE_HUE_MARGIN)
             if spanned == self.spanned:
                 return
-            self.spanned, self.prior = spanned, prior_model(spanned)
+            prior = prior_model(spanned)
+            if self._takes_in_the_scene(prior, point):
+                return
+            self.spanned, self.prior = spanned, prior
+
+    def _takes_in_the_scene(self, prior: ColourModel, point: np.ndarray) -> bool:
+        """Whether ``prior`` reads more of the still scene around ``point`` (the backgrounds'
+        median) as the sponge's colour than the prior so far, by :data:`SPAN_SURROUNDINGS`."""
+        gained = total = 0
+        for view, background in zip(self.views, self.backgrounds):
+            reach = SPAN_CHECK_REACH * view.focal / max(view.depth(point), 1e-3)
+            scene = background.median_near(view.pixel(point), reach)
+            if not len(scene):
+                continue
+            now = self.prior.back_project(scene) > 0.5
+            gained += int(np.count_nonzero((prior.back_project(scene) > 0.5) & ~now))
+            total += len(scene)
+        return gained > SPAN_SURROUNDINGS * max(total, 1)
 
     def _seed_regions(self, frames, point: np.ndarray):
         """The sponge's pixels at ``point`` in both cameras, by the prior: (windows (BGR),

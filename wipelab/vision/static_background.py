@@ -184,6 +184,15 @@ class StaticBackground:
             self._mean = np.clip(self.image + 0.5, 0, 255).astype(np.uint8)
         return self._mean
 
+    def median_near(self, canvas_point: np.ndarray, reach: float) -> np.ndarray:
+        """The median appearance of the background's pixels within ``reach`` canvas pixels
+        (a square) of ``canvas_point`` that see the frame: BGR uint8, (k, 1, 3), an image
+        one pixel wide."""
+        x0, y0, x1, y1 = self._bounds(np.asarray(canvas_point) - reach, (2 * reach, 2 * reach),
+                                      1)
+        inside = self.in_frame[y0:y1, x0:x1]
+        return self.mean[y0:y1, x0:x1][inside].reshape(-1, 1, 3)
+
     def _bounds(self, origin, shape, step) -> tuple[int, int, int, int]:
         """Background pixels covering a canvas window."""
         height, width = shape[:2]
