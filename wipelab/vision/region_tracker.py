@@ -255,7 +255,6 @@ class RegionTracker:
                             for view in self.views]
         #: the colour the user named (or the range given), None for a region (``--roi``)
         self.named = colour.hsv_range
-        self.named_hue = hue_centre(self.named) if self.named is not None else 0.0
         #: the colour searched for, then (once the sponge is found) the named colour as the
         #: sponge shows it: what the learnt colour is bounded by
         self.prior = prior_model(self.named) if self.named is not None else None
@@ -517,7 +516,7 @@ class RegionTracker:
         for _ in range(SPONGE_HUE_ROUNDS):
             windows, masks, _ = self._seed_regions(frames, point)
             hues = hue_range(windows, [vivid_part(window, mask) for window, mask
-                                       in zip(windows, masks)], self.named_hue)
+                                       in zip(windows, masks)], hue_centre(self.named))
             if hues is None:
                 return
             spanned = spanning_hues(self.named, *hues, SPONGE_HUE_MARGIN)
