@@ -166,17 +166,17 @@ def rendered(path: Path) -> bool:
 def held_out_demo(workdir: Path, index: int, duration: float) -> Demo:
     """Render (once) held-out scene ``index`` and load its truth."""
     seed = HELD_OUT_SEEDS_FROM + index
-    pattern = PATTERNS[index % 3]
-    frequency = round(0.5 + (index // 3) % 8 / 7.0, 3)
+    pattern, frequency = _pattern_and_frequency(index)
     path = workdir / f"heldout_{seed}_{pattern}_{frequency:g}hz_{duration:g}s"
     if not rendered(path):
         render_scene(path, seed, duration=duration, pattern=pattern, frequency_hz=frequency)
-    scene = json.loads((path / "scene.json").read_text())
-    return _load(path, f"{seed} {pattern} {frequency:g}Hz", scene["sponge"]["colour"],
-                 np.array(scene["cameras"]["T_world_left"]), scene.get("summary", {}),
-                 scene["motion"]["frequency_hz"],
-                 person_xy=(scene["person"]["x"], scene["person"]["y"]),
-                 size=_sponge_size(scene))
+    return _load_scene(path, f"{seed} {pattern} {frequency:g}Hz")
+
+
+def _pattern_and_frequency(index: int) -> tuple[str, float]:
+    """Held-out scene ``index``'s pattern (``circle, line, figure8`` in turn) and nominal
+    frequency (spread over 0.5-1.5 Hz), Hz."""
+    return PATTERNS[index % 3], round(0.5 + (index // 3) % 8 / 7.0, 3)
 
 
 #: Seeds of the held-out scenes whose sponge's hue lies beyond its name (:func:`off_name_demo`).
@@ -191,8 +191,7 @@ def off_name_demo(workdir: Path, index: int, duration: float) -> Demo:
     sponge under their light. Seeds from :data:`OFF_NAME_SEEDS_FROM`; everything else is the
     seed's."""
     seed = OFF_NAME_SEEDS_FROM + index
-    pattern = PATTERNS[index % 3]
-    frequency = round(0.5 + (index // 3) % 8 / 7.0, 3)
+    pattern, frequency = _pattern_and_frequency(index)
     colour = list(NAMED_HSV)[index % len(NAMED_HSV)]
     (low, _, _), (high, _, _) = NAMED_HSV[colour]
     beyond = 1 + index % 4
@@ -202,12 +201,8 @@ def off_name_demo(workdir: Path, index: int, duration: float) -> Demo:
     if not rendered(path):
         render_scene(path, seed, duration=duration, pattern=pattern, frequency_hz=frequency,
                      colour=colour, body_hue=hue)
-    scene = json.loads((path / "scene.json").read_text())
-    return _load(path, f"{seed} {colour}{'+' if above else '-'}{beyond} {pattern} "
-                 f"{frequency:g}Hz", colour, np.array(scene["cameras"]["T_world_left"]),
-                 scene.get("summary", {}), scene["motion"]["frequency_hz"],
-                 person_xy=(scene["person"]["x"], scene["person"]["y"]),
-                 size=_sponge_size(scene))
+    return _load_scene(path, f"{seed} {colour}{'+' if above else '-'}{beyond} {pattern} "
+                       f"{frequency:g}Hz")
 
 
 def dev_demo(workdir: Path, seed: int, duration: float) -> Demo:
@@ -218,18 +213,20 @@ def dev_demo(workdir: Path, seed: int, duration: float) -> Demo:
     path = workdir / f"dev_{seed}_{duration:g}s"
     if not rendered(path):
         render_scene(path, seed, duration=duration)
+    pattern = json.loads((path / "scene.json").read_text()).get("summary", {}).get("pattern")
+    return _load_scene(path, f"dev {seed} {pattern}")
+
+
+def _load_scene(path: Path, name: str) -> Demo:
+    """A scene of the independent generator with what its scene.json says: the sponge
+    body's colour name, the cameras' pose, the factors, the tempo, the person and the
+    sponge's size."""
     scene = json.loads((path / "scene.json").read_text())
-    summary = scene.get("summary", {})
-    return _load(path, f"dev {seed} {summary.get('pattern')}", scene["sponge"]["colour"],
-                 np.array(scene["cameras"]["T_world_left"]), summary,
-                 scene["motion"]["frequency_hz"],
-                 person_xy=(scene["person"]["x"], scene["person"]["y"]),
-                 size=_sponge_size(scene))
-
-
-def _sponge_size(scene: dict) -> tuple[float, float, float]:
     sponge = scene["sponge"]
-    return (sponge["length"], sponge["width"], sponge["height"])
+    return _load(path, name, sponge["colour"], np.array(scene["cameras"]["T_world_left"]),
+                 scene.get("summary", {}), scene["motion"]["frequency_hz"],
+                 person_xy=(scene["person"]["x"], scene["person"]["y"]),
+                 size=(sponge["length"], sponge["width"], sponge["height"]))
 
 
 def synth_demo(workdir: Path, pattern: str, frequency_hz: float, seed: int,
