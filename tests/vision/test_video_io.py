@@ -4,7 +4,7 @@ import pytest
 
 import wipelab.vision.video_io as video_io
 from wipelab.errors import InputError
-from wipelab.vision.video_io import H264Writer, StereoVideoReader, probe_video
+from wipelab.vision.video_io import H264Writer, ReplayedStart, StereoVideoReader, probe_video
 
 
 def _video(path, frames, fps=30, size=(64, 48)):
@@ -21,6 +21,64 @@ def test_pair_is_read_frame_by_frame(tmp_path):
     assert reader.frame_count == 12 and reader.fps == 30 and len(frames) == 12
     grey = [int(left[24, 32, 0]) for left, _ in frames]
     assert np.all(np.diff(grey) > 10)  # in order, none skipped or repeated
+
+
+def _counting_decodes(monkeypatch) -> list:
+    """Record each file opened for decoding from now on."""
+    opened, capture = [], cv2.VideoCapture
+
+    class Cv2CountingCaptures:
+        def VideoCapture(self, path, *args):  # noqa: N802 - cv2's name
+            opened.append(path)
+            return capture(path, *args)
+
+        def __getattr__(self, name):
+            return getattr(cv2, name)
+
+    monkeypatch.setattr(video_io, "cv2", Cv2CountingCaptures())
+    return opened
+
+
+def test_a_pass_after_a_short_one_replays_its_frames_and_goes_on_decoding(tmp_path,
+                                                                          monkeypatch):
+    """The warm-up reads 5 of 12 pairs; the next pass from the start gets those 5 from
+    memory (the same arrays) and the other 7 from the same decoding: each file is decoded
+    once, and the 12 pairs are a fresh decoding's."""
+    _video(tmp_path / "l.mp4", 12)
+    _video(tmp_path / "r.mp4", 12)
+    fresh = list(StereoVideoReader(tmp_path / "l.mp4", tmp_path / "r.mp4"))
+    reader = StereoVideoReader(tmp_path / "l.mp4", tmp_path / "r.mp4")
+    opened = _counting_decodes(monkeypatch)
+    replayed = ReplayedStart(reader, budget=10**9)
+    warmup = []
+    for k, pair in enumerate(replayed):
+        warmup.append(pair)
+        if k == 4:
+            break
+    again = list(replayed.frames(keep=False))
+    replayed.close()
+    assert len(opened) == 2  # one decoder per file, for both passes
+    assert len(again) == 12 and all(a[0] is w[0] and a[1] is w[1] for a, w in zip(again, warmup))
+    assert all(np.array_equal(a[0], f[0]) and np.array_equal(a[1], f[1])
+               for a, f in zip(again, fresh))
+
+
+@pytest.mark.parametrize("budget_pairs", [0, 3])
+def test_a_pass_beyond_the_budget_makes_the_next_decode_from_the_start(tmp_path, monkeypatch,
+                                                                       budget_pairs):
+    """Frames beyond the budget are not kept: the next pass decodes the video again from its
+    first frame, and still gives every pair once, in order."""
+    _video(tmp_path / "l.mp4", 12)
+    _video(tmp_path / "r.mp4", 12)
+    reader = StereoVideoReader(tmp_path / "l.mp4", tmp_path / "r.mp4")
+    opened = _counting_decodes(monkeypatch)
+    replayed = ReplayedStart(reader, budget=budget_pairs * 2 * 64 * 48 * 3)
+    first = [int(left[24, 32, 0]) for left, _ in replayed]  # 12 > budget_pairs
+    second = [int(left[24, 32, 0]) for left, _ in replayed.frames(keep=False)]
+    third = [int(left[24, 32, 0]) for left, _ in replayed]  # after a pass that kept nothing
+    replayed.close()
+    assert first == second == third and len(first) == 12 and np.all(np.diff(first) > 10)
+    assert len(opened) == 6
 
 
 @pytest.mark.parametrize("right_frames, right_fps, size, message", [

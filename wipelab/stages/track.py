@@ -59,12 +59,16 @@ from wipelab.vision.sponge_box import CORNER_SIGNS, EDGES, SpongeBox, yaw_rotati
 from wipelab.vision.tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_MONO, QUALITY_NONE,
                                     FrameEstimate, SpongeTracker, TrackerParams,
                                     commonest_failure, fleeting_runs)
-from wipelab.vision.video_io import H264Writer, StereoVideoReader
+from wipelab.vision.video_io import H264Writer, ReplayedStart, StereoVideoReader
 
 DEFAULT_COLOUR = "yellow"
 #: Frames before the tracking pass's first valid one are kept, up to this many bytes, to
 #: follow the sponge back to the start (:func:`track_backwards`).
 BACKWARD_BYTES = 400_000_000
+#: Frame pairs of the warm-up kept, up to this many bytes, for the tracking pass to start
+#: from without decoding them again (:class:`~wipelab.vision.video_io.ReplayedStart`; a
+#: 3 s warm-up of 1280x720 pairs is 500 MB).
+WARMUP_BYTES = 600_000_000
 #: Points of the first valid frames that start the backward track.
 SEED_FRAMES = 3
 LEFT_FRAME, RIGHT_FRAME = "stereo_left_optical", "stereo_right_optical"
@@ -335,10 +339,21 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
     pass from the first frame (so that the first seconds are tracked too); the frames before
     that pass's first valid one are then followed backwards from it
     (:func:`track_backwards`). Runs of valid frames too short to be the sponge are then
-    dropped (:func:`~wipelab.vision.tracker.fleeting_runs`). ``on_frame`` is called with
-    each frame's index and estimate of the tracking pass, ``frame_sink`` with each of its
-    frame pairs.
+    dropped (:func:`~wipelab.vision.tracker.fleeting_runs`). The tracking pass replays the
+    frames the warm-up decoded from memory (up to :data:`WARMUP_BYTES`) rather than decoding
+    them again. ``on_frame`` is called with each frame's index and estimate of the tracking
+    pass, ``frame_sink`` with each of its frame pairs.
     """
+    replayed = ReplayedStart(reader, WARMUP_BYTES)
+    try:
+        return _run_tracker(tracker, replayed, params, quiet, on_frame, frame_sink)
+    finally:
+        replayed.close()
+
+
+def _run_tracker(tracker: SpongeTracker, reader: ReplayedStart, params: TrackParams,
+                 quiet: bool, on_frame, frame_sink) -> TrackResult | None:
+    """:func:`run_tracker`'s passes over ``reader``."""
     n = reader.frame_count
     poses = np.full((n, 4), np.nan)
     valid = np.zeros(n, bool)
@@ -370,7 +385,7 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
     if not tracker.identified:
         return None
     tracker.restart()
-    pair_bytes = 6 * reader.left.width * reader.left.height
+    pair_bytes = 6 * reader.reader.left.width * reader.reader.left.height
     before_first: deque = deque(maxlen=max(1, BACKWARD_BYTES // pair_bytes))
     first, seed = None, []
 
@@ -383,7 +398,7 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
 
     with tqdm(total=n, desc="track", unit="frame", disable=quiet, file=sys.stderr,
               leave=False) as bar:
-        for k, (left, right) in enumerate(reader):
+        for k, (left, right) in enumerate(reader.frames(keep=False)):
             if frame_sink is not None:
                 frame_sink(left, right)
             estimate = tracker.step(left, right)

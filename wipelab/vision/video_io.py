@@ -141,6 +141,71 @@ class StereoVideoReader:
             decoders.stop()
 
 
+class ReplayedStart:
+    """Passes over a stereo video, each from its first frame, that decode its start once:
+    the frame pairs a pass decodes are kept, up to ``budget`` bytes, and the next pass
+    replays them from memory before it goes on decoding where the decoding stopped (the
+    track stage reads the first seconds to find the sponge, then tracks from the start).
+    A pass that reaches beyond what could be kept makes the next pass decode from the start
+    again. The pairs are the reader's (read-only), the same as a new decoding would give.
+
+    Parameters
+    ----------
+    reader : StereoVideoReader
+    budget : int
+        Bytes of frame pairs kept at most.
+    """
+
+    def __init__(self, reader: StereoVideoReader, budget: int):
+        self.reader = reader
+        self.budget = budget
+        self._kept: list[tuple[np.ndarray, np.ndarray]] = []
+        self._decoding: Iterator | None = None  # a pass's decoding, after the kept pairs
+        self._all_kept = False  # every pair ``_decoding`` gave is in ``_kept``
+
+    @property
+    def frame_count(self) -> int:
+        return self.reader.frame_count
+
+    @property
+    def fps(self) -> float:
+        return self.reader.fps
+
+    def __iter__(self) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+        """A pass that keeps what it decodes for the next."""
+        return self.frames(keep=True)
+
+    def frames(self, keep: bool = True) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+        """A pass from the first frame pair; ``keep`` False: the last pass, which lets go of
+        each kept pair once it has handed it on (and keeps nothing)."""
+        if not self._all_kept:
+            self.close()
+            self._decoding, self._all_kept = iter(self.reader), True
+        decoding = self._decoding
+        index = 0
+        while index < len(self._kept):
+            pair = self._kept[index]
+            if not keep:
+                self._kept[index] = None
+            index += 1
+            yield pair
+        if not keep:
+            self._kept, self._all_kept = [], False
+        for pair in decoding:  # not closed when this pass is left: the next one goes on
+            if self._all_kept and (len(self._kept) + 1) * (pair[0].nbytes + pair[1].nbytes) \
+                    <= self.budget:
+                self._kept.append(pair)
+            elif self._all_kept:
+                self._kept, self._all_kept = [], False
+            yield pair
+
+    def close(self) -> None:
+        """Stop decoding and let go of the kept pairs."""
+        if self._decoding is not None:
+            self._decoding.close()
+        self._decoding, self._kept, self._all_kept = None, [], False
+
+
 class _Decoders:
     """One decoding thread per file, each filling its queue until told to stop."""
 
