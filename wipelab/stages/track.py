@@ -50,6 +50,7 @@ from wipelab.manifest import build_manifest, write_json
 from wipelab.rotations import (quaternion_xyzw_from_rotation, quaternions_xyzw_from_rotations,
                                rotation_about_axis)
 from wipelab.stage_output import staged_output
+from wipelab.thread_priority import run_as_helper
 from wipelab.trajectory_csv import write_trajectory
 from wipelab.vision.calibration import StereoCalibration, load_calibration
 from wipelab.vision.colour_model import NAMED_COLOURS, ColourSource, parse_hsv_range
@@ -656,6 +657,7 @@ class LogVideos:
         self._pending.put((left, right))
 
     def _encode(self) -> None:
+        run_as_helper()  # the tracker comes first
         try:
             while (pair := self._pending.get()) is not None:
                 for writer, frame in zip(self._writers, pair):

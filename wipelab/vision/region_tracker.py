@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from wipelab.thread_priority import run_as_helper
 from wipelab.vision.acquisition import (AcquisitionParams, CandidateTrack, CandidateTracks,
                                         StereoCandidate, stereo_candidates, triangulate_rays)
 from wipelab.vision.calibration import StereoCalibration
@@ -783,7 +784,8 @@ class RegionTracker:
         0.05-1 s, many frames of a live session), taken up :data:`TABLE_DELAY_FRAMES` frames
         later, waiting for it then: the same frame on every run, however fast the machine."""
         if self._table_worker is None:
-            self._table_worker = ThreadPoolExecutor(1, thread_name_prefix="wipelab-table")
+            self._table_worker = ThreadPoolExecutor(1, thread_name_prefix="wipelab-table",
+                                                    initializer=run_as_helper)
         job = self._table_worker.submit(self._table_fit, frames, list(self._table_points),
                                         self._table_centre.copy())
         self._table_jobs.append((self.frame + TABLE_DELAY_FRAMES, job))

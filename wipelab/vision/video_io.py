@@ -20,6 +20,7 @@ import numpy as np
 
 from wipelab.errors import InputError, interrupts_deferred
 from wipelab.input_files import check_readable
+from wipelab.thread_priority import run_as_helper
 
 
 @dataclass(frozen=True)
@@ -64,6 +65,7 @@ def _decode(path: str, out: queue.Queue, stop: threading.Event) -> None:
     # one FFmpeg thread per file: the two files already decode in parallel, and FFmpeg's
     # own frame threads would only add synchronisation (about a quarter more CPU time)
     # a decoder that fails hands its error over: the reader must not wait for it forever
+    run_as_helper()  # the thread that uses the frames comes first
     capture = cv2.VideoCapture(path, cv2.CAP_FFMPEG, [cv2.CAP_PROP_N_THREADS, 1])
     try:
         while not stop.is_set():
