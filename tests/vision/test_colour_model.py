@@ -42,6 +42,21 @@ def test_histogram_model_separates_sponge_from_background():
     assert probability[mask == 0].mean() < 0.02
 
 
+def test_likely_is_the_probability_above_one_half_for_every_model_and_colour():
+    """``likely`` (bytes, one HSV conversion for several models) marks exactly the pixels
+    where ``back_project`` exceeds 0.5, on every colour an image can hold."""
+    rng = np.random.default_rng(3)
+    image, mask = _scene(rng)
+    every_colour = rng.integers(0, 256, (256, 256, 3), dtype=np.uint8)
+    models = [ColourModel.fit([image], [mask]), prior_model(NAMED_COLOURS["yellow"]),
+              prior_model(NAMED_COLOURS["red"])]
+    for model in models:
+        for frame in (image, every_colour):
+            likely = model.likely(cv2.cvtColor(frame, cv2.COLOR_BGR2HSV))
+            assert np.array_equal(likely, model.back_project(frame) > 0.5)
+    assert models[0].likely(cv2.cvtColor(image, cv2.COLOR_BGR2HSV))[45:75, 65:115].all()
+
+
 def test_linear_feature_is_linear_in_the_mixing_of_sponge_and_background():
     image, mask = _scene(np.random.default_rng(2))
     feature = LinearColourFeature.fit([image], [mask])

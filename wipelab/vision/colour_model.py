@@ -171,10 +171,20 @@ class ColourModel:
 
     def back_project(self, frame_bgr: np.ndarray) -> np.ndarray:
         """Sponge probability per pixel, float32 in [0, 1], shape (h, w)."""
-        hsv = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2HSV)
+        return np.multiply(self._probability_bytes(cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2HSV)),
+                           1.0 / 255.0, dtype=np.float32)
+
+    def likely(self, hsv: np.ndarray) -> np.ndarray:
+        """Where the sponge probability exceeds one half, bool (h, w), of a frame converted to
+        HSV (``cv2.COLOR_BGR2HSV``: one conversion serves several models): the same pixels
+        as ``back_project(frame) > 0.5``."""
+        return self._probability_bytes(hsv) >= 128  # 128 / 255 > 0.5 > 127 / 255
+
+    def _probability_bytes(self, hsv: np.ndarray) -> np.ndarray:
+        """Sponge probability per pixel of an HSV image, uint8 0-255."""
         probability = cv2.calcBackProject([hsv], [0, 1], self._hist, [0, 180, 0, 256], 1.0)
         bright = cv2.inRange(hsv, (0, 0, self.v_min), (180, 255, 255))
-        return np.multiply(cv2.bitwise_and(probability, bright), 1.0 / 255.0, dtype=np.float32)
+        return cv2.bitwise_and(probability, bright)
 
 
 @dataclass(frozen=True)

@@ -537,8 +537,8 @@ class RegionTracker:
             scene = background.median_near(view.pixel(point), reach)
             if not len(scene):
                 continue
-            now = self.prior.back_project(scene) > 0.5
-            gained += int(np.count_nonzero((prior.back_project(scene) > 0.5) & ~now))
+            hsv = cv2.cvtColor(scene, cv2.COLOR_BGR2HSV)
+            gained += int(np.count_nonzero(prior.likely(hsv) & ~self.prior.likely(hsv)))
             total += len(scene)
         return gained > SPAN_SURROUNDINGS * max(total, 1)
 

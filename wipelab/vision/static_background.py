@@ -137,12 +137,16 @@ class StaticBackground:
                 inside = cv2.resize(mask.astype(np.uint8), (x1 - x0, y1 - y0),
                                     interpolation=cv2.INTER_AREA)
                 under[y0:y1, x0:x1] |= cv2.dilate(inside, np.ones((3, 3), np.uint8))
-        towards = np.sign(small.astype(np.float32) - self.image)
-        self.image += self._steps[..., None] * towards
+        change = small.astype(np.float32)  # in place: a few full-size temporaries fewer
+        np.subtract(change, self.image, out=change)
+        np.sign(change, out=change)
+        change *= self._steps[..., None]
+        self.image += change
         self._mean = self.first = None
+        hsv = cv2.cvtColor(self.mean, cv2.COLOR_BGR2HSV)
         coloured = np.zeros(self.in_frame.shape, bool)
         for model in models:
-            coloured |= model.back_project(self.mean) > 0.5
+            coloured |= model.likely(hsv)
         self.coloured = coloured & self.in_frame
         self.ghosts &= self.coloured
         self.updates += 1
