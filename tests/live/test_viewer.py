@@ -32,3 +32,21 @@ def test_spawn_without_a_display_says_what_to_do(monkeypatch):
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     with pytest.raises(InputError, match="spawn needs a display.*--viewer serve"):
         viewer_sinks("spawn")
+
+
+def test_connect_streams_to_a_viewer_that_listens(monkeypatch):
+    """A listening port is taken (the check waits for a viewer still starting), a closed
+    one refused at once after the wait."""
+    import socket
+
+    import wipelab.live.viewer as viewer
+
+    monkeypatch.setattr(viewer, "LISTEN_WAIT_S", 0.3)
+    with socket.socket() as listener:
+        listener.bind(("127.0.0.1", 0))
+        listener.listen()
+        port = listener.getsockname()[1]
+        (sink,) = viewer_sinks(f"connect={port}")
+        assert sink is not None
+    with pytest.raises(InputError, match=f"nothing listens at 127.0.0.1:{port}"):
+        viewer_sinks(f"connect=rerun+http://127.0.0.1:{port}/proxy")

@@ -528,3 +528,22 @@ def test_a_file_the_user_may_not_read_is_named(argv, names, unprivileged):
     after = tree(folder)
     assert after == before, {k: (before.get(k), after.get(k)) for k in before.keys() | after.keys()
                              if before.get(k) != after.get(k)}
+
+
+def test_a_viewer_address_nobody_listens_at_is_one_line_exit_2_not_a_session_that_blocks(
+        workspace, monkeypatch):
+    """``--viewer connect=PORT`` with no viewer there: the stream's buffer would fill and
+    block the session for good (as it did, in bench_live, for 25 minutes)."""
+    import socket
+
+    import wipelab.live.viewer as viewer
+
+    monkeypatch.setattr(viewer, "LISTEN_WAIT_S", 0.3)
+    with socket.socket() as probe:  # a port nobody listens at
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    before = tree(workspace)
+    result = invoke(["live", "demo", *LEARN_OUT, "--viewer", f"connect={port}"])
+    assert result.exit_code == 2, (result.output, result.exception)
+    error_line(result.stderr, "--viewer", f"nothing listens at 127.0.0.1:{port}")
+    assert tree(workspace) == before

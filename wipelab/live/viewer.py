@@ -8,7 +8,8 @@
   before (up to the server's memory limit) as long as the session runs;
 * ``connect=ADDR``: stream to a viewer (or ``rerun --serve-grpc``, ``rerun --save FILE``)
   already listening at ADDR, a ``rerun+http://HOST:PORT/proxy`` URL or a port on this
-  machine.
+  machine; nothing listening there (within :data:`LISTEN_WAIT_S`) is an error, not a
+  session that blocks once the stream's buffer is full.
 """
 
 from __future__ import annotations
@@ -48,6 +49,37 @@ def _free_port() -> int:
         return probe.getsockname()[1]
 
 
+#: Seconds a viewer is waited for to listen (one just started takes a moment).
+LISTEN_WAIT_S = 10.0
+
+
+def _listening(host: str, port: int) -> bool:
+    """Whether something accepts TCP connections at host:port within
+    :data:`LISTEN_WAIT_S` seconds."""
+    deadline = time.monotonic() + LISTEN_WAIT_S
+    while True:
+        try:
+            with socket.create_connection((host, port), timeout=1.0):
+                return True
+        except OSError:
+            if time.monotonic() >= deadline:
+                return False
+        time.sleep(0.1)
+
+
+def _reachable(url: str) -> str:
+    """``url`` (a checked proxy URL) if a viewer listens there; else InputError: the stream
+    to an address nobody listens at fills the SDK's buffer and blocks the session."""
+    from urllib.parse import urlsplit
+
+    where = urlsplit(url.replace("rerun+", "", 1).replace("rerun://", "http://", 1))
+    host, port = where.hostname or "127.0.0.1", where.port or DEFAULT_PORT
+    if not _listening(host, port):
+        raise InputError(f"--viewer: connect: nothing listens at {host}:{port} (start the "
+                         f"viewer first, e.g. rerun --port {port}, or use --viewer serve)")
+    return url
+
+
 def _spawned_viewer() -> str:
     """Start a Rerun viewer listening on a free port (detached: it outlives the session);
     its proxy URL."""
@@ -59,12 +91,7 @@ def _spawned_viewer() -> str:
     port = _free_port()
     subprocess.Popen([rerun_program(), "--port", str(port)], start_new_session=True,
                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    deadline = time.monotonic() + 10.0
-    while time.monotonic() < deadline:   # wait until it listens
-        with socket.socket() as probe:
-            if probe.connect_ex(("127.0.0.1", port)) == 0:
-                break
-        time.sleep(0.1)
+    _listening("127.0.0.1", port)   # wait until it listens
     return f"rerun+http://127.0.0.1:{port}/proxy"
 
 
@@ -96,4 +123,4 @@ def viewer_sinks(text: str) -> tuple:
 
         click.echo(f"live: streaming; open it with: rerun {sink.uri}", err=True)
         return (sink,)
-    return (rr.GrpcSink(_spawned_viewer() if kind == "spawn" else argument),)
+    return (rr.GrpcSink(_spawned_viewer() if kind == "spawn" else _reachable(argument)),)
