@@ -23,19 +23,27 @@ def test_pair_is_read_frame_by_frame(tmp_path):
     assert np.all(np.diff(grey) > 10)  # in order, none skipped or repeated
 
 
-def _counting_decodes(monkeypatch) -> list:
-    """Record each file opened for decoding from now on."""
-    opened, capture = [], cv2.VideoCapture
+def _with_capture(monkeypatch, capture) -> None:
+    """The reader's decoders open files with ``capture`` instead of cv2.VideoCapture."""
 
-    class Cv2CountingCaptures:
-        def VideoCapture(self, path, *args):  # noqa: N802 - cv2's name
-            opened.append(path)
-            return capture(path, *args)
+    class Cv2WithCapture:
+        VideoCapture = staticmethod(capture)
 
         def __getattr__(self, name):
             return getattr(cv2, name)
 
-    monkeypatch.setattr(video_io, "cv2", Cv2CountingCaptures())
+    monkeypatch.setattr(video_io, "cv2", Cv2WithCapture())
+
+
+def _counting_decodes(monkeypatch) -> list:
+    """Record each file opened for decoding from now on."""
+    opened, capture = [], cv2.VideoCapture
+
+    def counted(path, *args):
+        opened.append(path)
+        return capture(path, *args)
+
+    _with_capture(monkeypatch, counted)
     return opened
 
 
@@ -61,6 +69,26 @@ def test_a_pass_after_a_short_one_replays_its_frames_and_goes_on_decoding(tmp_pa
     assert len(again) == 12 and all(a[0] is w[0] and a[1] is w[1] for a, w in zip(again, warmup))
     assert all(np.array_equal(a[0], f[0]) and np.array_equal(a[1], f[1])
                for a, f in zip(again, fresh))
+
+
+def test_a_last_pass_left_midway_leaves_the_next_pass_whole(tmp_path, monkeypatch):
+    """The last pass lets go of what it replays; left after 2 pairs (an error in the
+    tracker, say), a pass after it decodes from the start and gives all 12 pairs."""
+    _video(tmp_path / "l.mp4", 12)
+    _video(tmp_path / "r.mp4", 12)
+    reader = StereoVideoReader(tmp_path / "l.mp4", tmp_path / "r.mp4")
+    opened = _counting_decodes(monkeypatch)
+    replayed = ReplayedStart(reader, budget=10**9)
+    for k, _ in enumerate(replayed):
+        if k == 4:
+            break
+    for k, _ in enumerate(replayed.frames(keep=False)):
+        if k == 1:
+            break
+    grey = [int(left[24, 32, 0]) for left, _ in replayed]
+    replayed.close()
+    assert len(grey) == 12 and np.all(np.diff(grey) > 10)
+    assert len(opened) == 4
 
 
 @pytest.mark.parametrize("budget_pairs", [0, 3])
@@ -129,13 +157,7 @@ def test_a_decoder_that_fails_midway_is_one_clear_error_not_a_hang(tmp_path, mon
         def release(self):
             self.capture.release()
 
-    class Cv2WithFailingCapture:
-        VideoCapture = FailingCapture
-
-        def __getattr__(self, name):
-            return getattr(cv2, name)
-
-    monkeypatch.setattr(video_io, "cv2", Cv2WithFailingCapture())
+    _with_capture(monkeypatch, FailingCapture)
     with pytest.raises(InputError, match=r"r\.mp4: cannot be decoded at frame 5 of 12: .*injected"):
         for _ in reader:
             pass

@@ -184,21 +184,19 @@ class ReplayedStart:
             self.close()
             self._decoding, self._all_kept = iter(self.reader), True
         decoding = self._decoding
-        index = 0
-        while index < len(self._kept):
-            pair = self._kept[index]
-            if not keep:
-                self._kept[index] = None
-            index += 1
-            yield pair
-        if not keep:
+        if keep:
+            yield from self._kept
+        else:  # nothing after this pass replays: from now on, nothing is kept
+            pending = self._kept[::-1]
             self._kept, self._all_kept = [], False
+            while pending:
+                yield pending.pop()
         for pair in decoding:  # not closed when this pass is left: the next one goes on
-            if self._all_kept and (len(self._kept) + 1) * (pair[0].nbytes + pair[1].nbytes) \
-                    <= self.budget:
-                self._kept.append(pair)
-            elif self._all_kept:
-                self._kept, self._all_kept = [], False
+            if self._all_kept:
+                if (len(self._kept) + 1) * (pair[0].nbytes + pair[1].nbytes) <= self.budget:
+                    self._kept.append(pair)
+                else:
+                    self._kept, self._all_kept = [], False
             yield pair
 
     def close(self) -> None:
