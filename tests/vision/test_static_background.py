@@ -239,3 +239,39 @@ def test_the_still_scene_near_a_point_is_the_median_without_the_sponge_that_pass
     corner = background.in_frame[:10, :10]   # the canvas's rim sees no frame pixel
     assert 0 < np.count_nonzero(corner) < corner.size
     assert len(background.median_near(np.array([0.0, 0.0]), 10.0)) == np.count_nonzero(corner)
+
+
+def test_a_sponge_of_nearly_the_cloths_shade_on_it_is_not_taken_for_the_cloth():
+    """A sponge within the still-thing test's grey levels of the cloth it wipes on: once the
+    background has seen the sponge (in its region), its pixels are more like it than like
+    the cloth, and stay the sponge's."""
+    rng = np.random.default_rng(3)
+    background = _background()
+    model = prior_model(NAMED_COLOURS["cyan"])
+    near_shade = (184, 174, 46)  # 16 grey levels from the cloth at most: under the threshold
+
+    def frame_at(t):
+        frame = np.full((SIZE[1], SIZE[0], 3), TABLE, np.uint8)
+        frame[30:110, 30:150] = CLOTH
+        x = int(90 + 40 * np.sin(2 * np.pi * t / 40))
+        sponge = np.zeros(frame.shape[:2], bool)
+        sponge[60:76, x - 8:x + 8] = True
+        frame[sponge] = near_shade
+        return np.clip(frame + rng.normal(0, 3, frame.shape), 0, 255).astype(np.uint8), sponge
+
+    images = np.stack([background.canvas_image(frame_at(t)[0]) for t in range(0, 40, 2)])
+    background.initialise(images, np.stack([model.back_project(i) > 0.5 for i in images]))
+    frame, sponge = frame_at(41)
+    before = background.still_in_canvas_image(background.canvas_image(frame))
+    assert before[_canvas(background, sponge)].mean() > 0.9  # unseen: like the cloth
+    for t in range(42, 80, 3):
+        frame, sponge = frame_at(t)
+        background.update(frame, (model,), _region_of(background, sponge), GHOST)
+    assert background.sponge_bgr is not None
+    assert np.abs(background.sponge_bgr.astype(int) - near_shade).max() <= 4
+    frame, sponge = frame_at(81)
+    sponge = _canvas(background, sponge)
+    still_now = background.still_in_canvas_image(background.canvas_image(frame))
+    cloth = _canvas(background, np.pad(np.ones((76, 116), bool), ((32, 12), (32, 12))))
+    assert still_now[sponge].mean() < 0.1
+    assert still_now[cloth & ~sponge].mean() > 0.9

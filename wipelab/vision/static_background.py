@@ -16,6 +16,11 @@ half of the time and turns into a still thing of its own (a ghost): a still thin
 under the sponge's region (nine tenths of it), or holds the middle of its path, is
 remembered as a ghost until the median there is no longer of the sponge's colour.
 
+A sponge whose shade lies within the still-thing test's grey levels of a cloth it wipes on
+would vanish into it: each update also learns how the sponge looks in the camera (its
+region's median colour), and a pixel more like the sponge than like the still thing at its
+place is not the still thing.
+
 A pixel next to a still thing still shows it when it matches the background at its place
 or a background pixel away: the edges of a checkered or grained thing move by a pixel as the
 low-resolution background, compression and noise place them.
@@ -32,6 +37,15 @@ import numpy as np
 
 from wipelab.vision.colour_model import ColourModel
 from wipelab.vision.undistortion import Undistorter
+
+
+def _largest_channel(difference: np.ndarray) -> np.ndarray:
+    """The largest of the three channels (h, w) of a uint8 image (h, w, 3)."""
+    return np.maximum(np.maximum(difference[..., 0], difference[..., 1]), difference[..., 2])
+
+
+#: Background pixels well inside the sponge's region needed to learn how it looks.
+MIN_SPONGE_PIXELS = 5
 
 
 class StaticBackground:
@@ -85,6 +99,10 @@ class StaticBackground:
         # would take in a sponge that wipes slowly, or a path smaller than itself, and hide
         # it from the search; None once the sponge is tracked (updates)
         self.first: np.ndarray | None = None
+        #: how the sponge looks in this camera (BGR uint8 (3,): the median of its region's
+        #: pixels at the last update; None before): a pixel more like it than like the still
+        #: thing there is not the still thing
+        self.sponge_bgr: np.ndarray | None = None
         self.updates = 0
 
     def canvas_image(self, frame: np.ndarray) -> np.ndarray:
@@ -137,6 +155,10 @@ class StaticBackground:
                 inside = cv2.resize(mask.astype(np.uint8), (x1 - x0, y1 - y0),
                                     interpolation=cv2.INTER_AREA)
                 under[y0:y1, x0:x1] |= cv2.dilate(inside, np.ones((3, 3), np.uint8))
+                core = cv2.erode(inside, np.ones((3, 3), np.uint8)) > 0
+                if np.count_nonzero(core) >= MIN_SPONGE_PIXELS:
+                    self.sponge_bgr = np.median(small[y0:y1, x0:x1][core], axis=0).astype(
+                        np.uint8)
         # the sign of (small - image) as two comparisons: np.sign is several times slower
         towards = np.greater(small, self.image).astype(np.float32)
         towards -= np.less(small, self.image)
@@ -269,14 +291,19 @@ class StaticBackground:
                                     reach - min(x, reach), reach - min(width - x - w, reach),
                                     cv2.BORDER_REPLICATE)
         box = image[y:y + h, x:x + w]
-        matched = np.zeros((h, w), np.uint8)
-        largest = (self.difference - 1,) * 3
+        closest = np.full((h, w), 255, np.uint8)  # to the background, largest channel
         for dy, dx in ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1),
                        (1, 1)):
             top, left = reach + dy * reach, reach + dx * reach
-            difference = cv2.absdiff(box, padded[top:top + h, left:left + w])
-            matched |= cv2.inRange(difference, (0, 0, 0), largest)
-        unchanged[y:y + h, x:x + w] = (near[y:y + h, x:x + w] > 0) & (matched > 0)
+            np.minimum(closest, _largest_channel(cv2.absdiff(box, padded[top:top + h,
+                                                                          left:left + w])),
+                       out=closest)
+        matched = closest < self.difference
+        if self.sponge_bgr is not None:
+            # a sponge of a shade near the still thing's is more like itself than like it
+            matched &= closest < _largest_channel(cv2.absdiff(
+                box, np.broadcast_to(self.sponge_bgr, box.shape).copy()))
+        unchanged[y:y + h, x:x + w] = (near[y:y + h, x:x + w] > 0) & matched
         return unchanged
 
     def _background_pixels(self, canvas_points: np.ndarray) -> np.ndarray:
