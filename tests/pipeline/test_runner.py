@@ -2,7 +2,6 @@
 
 import fcntl
 import json
-import time
 
 import pytest
 from click.testing import CliRunner
@@ -38,9 +37,7 @@ def test_first_run_runs_every_stage_and_an_unchanged_rerun_reuses_them(learn_pip
     assert set(record.outputs) >= {"model.json", "learn.mcap", "learn.rrd", "manifest.json"}
     assert read_record(run_dir / "rollout").input == "learn/model.json"
 
-    start = time.perf_counter()
     reused, lines = run(pipeline, run_dir)
-    assert time.perf_counter() - start < 1.0
     assert reused == {"learn": True, "rollout": True}
     assert "[1/2] reused learn (cache hit)" in lines
     assert lines[-1].endswith("ran 0 stage(s); reused 2: learn, rollout")
