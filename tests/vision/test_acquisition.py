@@ -102,3 +102,20 @@ def test_a_resting_sponge_is_static_until_it_moves():
         tracks.update(frame, [_candidate(rest + [0.1 * np.sin(phase), 0.0, 0.0], 0.09)])
     assert not tracks.is_static(rest, 0.09)
     assert tracks.moving(129) is not None
+
+
+def test_a_remembered_still_thing_that_seems_to_move_is_not_picked():
+    # a cloth whose region's centre an arm passing over it moves periodically by 3 cm: it
+    # looks like a moving thing until the tracker, having followed it, remembers it as still
+    cloth = np.array([-0.3, 0.1, 0.9])
+
+    def follow(tracks):
+        for frame in range(90):
+            wobble = np.array([0.03 * np.sin(2 * np.pi * frame / 30.0), 0.0, 0.0])
+            tracks.update(frame, [_candidate(cloth + wobble, 0.2)])
+        return tracks.moving(89)
+
+    assert follow(CandidateTracks()) is not None
+    remembered = CandidateTracks()
+    remembered.static[-1] = (cloth, 0.2)
+    assert follow(remembered) is None

@@ -53,3 +53,35 @@ def test_until_the_usual_area_is_known_both_cameras_regions_must_agree_in_size()
     assert np.allclose(estimate.point, point, atol=0.01)
     assert len(tracker.areas[0]) == len(tracker.areas[1]) == 1
     assert np.allclose(tracker.areas[0][0], 30 * 20 / FOCAL ** 2, rtol=0.15)
+
+
+def _followed(tracker: RegionTracker, points) -> None:
+    """Make ``tracker`` have followed ``points`` (n, 3), one per frame, as valid."""
+    for frame, point in enumerate(points):
+        tracker._valid_points.append((frame, np.asarray(point, float)))
+    tracker.frame = len(points)
+
+
+def test_a_big_thing_whose_centre_an_arm_moves_by_a_little_of_its_size_is_still():
+    # a 20 cm cloth that the wiping arm covers here and there: its region's centre moves
+    # periodically by 2.5 cm, a wiping sponge's by its stroke (10 cm or more)
+    t = np.arange(100) / 30.0
+    wobble = 0.025 * np.stack([np.sin(2 * np.pi * t), np.zeros_like(t), np.zeros_like(t)], 1)
+    cloth, _ = _tracker()
+    cloth.size = 0.2
+    _followed(cloth, np.array([0.0, 0.05, 1.0]) + wobble)
+    assert cloth._kept_still(np.array([0.0, 0.05, 1.0]))
+    sponge, _ = _tracker()  # 10 cm, wiping a 10 cm stroke
+    _followed(sponge, np.array([0.0, 0.05, 1.0]) + 2.0 * wobble)
+    assert not sponge._kept_still(np.array([0.0, 0.05, 1.0]))
+
+
+def test_after_following_a_still_thing_the_sponge_is_identified_anew():
+    tracker, point = _tracker()
+    tracker._track_start = 5
+    _followed(tracker, np.repeat(point[None], 100, axis=0))
+    tracker._forget_track(point)
+    assert not tracker.identified  # its size was the still thing's
+    assert tracker.still_tracks == [(5, 100)]
+    assert tracker.candidates.is_static(point, 0.1)
+    assert not any(background.ghosts.any() for background in tracker.backgrounds)

@@ -377,7 +377,7 @@ class CandidateTracks:
         p = self.params
         best, best_travel = None, p.min_travel
         for track in self.tracks:
-            if track.ident in self.rejected:
+            if track.ident in self.rejected or self.is_static(track.last_point, track.size):
                 continue
             seen = sum(1 for f in track.frames if frame - f < p.window)
             if seen < p.min_presence:

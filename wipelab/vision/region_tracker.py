@@ -123,10 +123,13 @@ class RegionTrackerParams:
     max_height : float
         A moving thing of the sponge's colour whose centre keeps higher than this above the
         table is not the sponge (a hand or sleeve of a near colour), metres.
-    still_seconds, still_travel : float
-        A tracked thing that moves less than ``still_travel`` metres (90th percentile of its
-        distances from their median) over ``still_seconds`` is a still thing the tracker went
-        to, not a wiping sponge: it is remembered as still and the sponge searched again.
+    still_seconds, still_travel, still_share : float
+        A tracked thing that moves less than ``still_travel`` metres or ``still_share`` of
+        its own size, whichever is more (90th percentile of its distances from their median),
+        over ``still_seconds`` is a still thing the tracker went to, not a wiping sponge: it
+        is remembered as still and the sponge searched again. A wiping stroke is longer than
+        the sponge; the region of a cloth that the wiping arm covers here and there moves by
+        a small share of the cloth's size.
     """
 
     search_width: int = 320
@@ -148,6 +151,7 @@ class RegionTrackerParams:
     max_height: float = 0.08
     still_seconds: float = 3.0
     still_travel: float = 0.01
+    still_share: float = 0.25
 
 
 @dataclass
@@ -293,6 +297,10 @@ class RegionTracker:
         self._valid_points: deque[tuple[int, np.ndarray]] = deque(maxlen=600)  # (frame, point)
         self._last_seen: np.ndarray | None = None
         self._plane: Plane | None = None
+        self._track_start = 0  # frame at which the sponge was last found
+        #: (first frame, end frame) of each track of this pass that turned out to follow a
+        #: still thing (:meth:`_kept_still`): none of its frames showed the sponge
+        self.still_tracks: list[tuple[int, int]] = []
         # the sponge's pixels in both cameras when it was identified (window images, 0/255
         # masks): what colour models are learnt from
         self.seed_windows: list[np.ndarray] = []
@@ -332,6 +340,7 @@ class RegionTracker:
         for recent in self._recent:
             recent.clear()
         self._last_seen = None  # the pass starts where the video starts, not where it ended
+        self.still_tracks.clear()
         self._release_visited()
 
     def _release_visited(self) -> None:
@@ -379,6 +388,7 @@ class RegionTracker:
             if candidate is None:
                 return self._invalid("searching")
             self.history.append((self.frame - 1, candidate.point.copy()))
+            self._track_start = self.frame
         return self._measure(frames)
 
     # ------------------------------------------------------------ acquisition
@@ -504,6 +514,7 @@ class RegionTracker:
                                             in zip(windows, cores)], masks, unsure=masks)
         self.history.append((self.frame - 1, point.copy()))
         self.seed_windows, self.seed_masks = windows, masks
+        self._track_start = self.frame
         self._table_centre = point.copy()
         self._measure_table(None if self._table_points else frames)
         return True
@@ -973,12 +984,21 @@ class RegionTracker:
             return False
         recent = np.array(recent)
         spread = np.linalg.norm(recent - np.median(recent, axis=0), axis=1)
-        return float(np.percentile(spread, 90)) < p.still_travel
+        return float(np.percentile(spread, 90)) < max(p.still_travel, p.still_share * self.size)
 
     def _forget_track(self, point: np.ndarray) -> None:
-        """The tracker followed a still thing: remember it as one and search for the sponge
-        anew (where it has been wiping is unknown again)."""
+        """The tracker followed a still thing: remember it as one and identify the sponge
+        anew among the moving things of its colour (where it has been wiping and its size
+        are unknown again: both were learnt from the still thing). The still thing was taken
+        for the sponge's ghost in the backgrounds; it is a still thing of them again."""
         self.candidates.static[-1 - len(self.candidates.static)] = (point.copy(), self.size)
+        self.still_tracks.append((self._track_start, self.frame))
+        self.size = None
+        self.areas = [deque(maxlen=120), deque(maxlen=120)]
+        self._stereo_points.clear()  # the plane the sponge moves in, too
+        self._plane = None
+        for background in self.backgrounds:
+            background.forget_ghosts()
         self.history.clear()
         self._valid_points.clear()
         self._last_seen = None

@@ -175,6 +175,12 @@ class StaticBackground:
         self._classify()
         self._forget_ghosts(under, max_ghost)
 
+    def forget_ghosts(self) -> None:
+        """No still thing is the sponge's ghost any more (what was taken for the sponge was
+        a still thing)."""
+        self.ghosts[:] = False
+        self._classify()
+
     def _classify(self) -> None:
         self.still = (self.coloured & ~self.ghosts).astype(np.uint8)
 
