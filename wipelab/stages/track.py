@@ -415,13 +415,13 @@ def _run_tracker(tracker: SpongeTracker, reader: ReplayedStart, params: TrackPar
             bar.update()
     if before_first and seed:
         track_backwards(tracker, seed, reversed(before_first), keep)
+    dropped = np.zeros(n, bool)
     for start, end in tracker.region.still_tracks:
         # what was followed there stood still: a cloth or a plate, not the sponge (from the
         # video's start when the frames before it were followed backwards from it)
-        start = 0 if first is not None and start <= first else start
-        valid[start:end], poses[start:end], quality[start:end] = False, np.nan, QUALITY_NONE
-    fleeting = fleeting_runs(valid, reader.fps)
-    valid[fleeting], poses[fleeting], quality[fleeting] = False, np.nan, QUALITY_NONE
+        dropped[0 if first is not None and start <= first else start:end] = True
+    dropped |= fleeting_runs(valid & ~dropped, reader.fps)
+    valid[dropped], poses[dropped], quality[dropped] = False, np.nan, QUALITY_NONE
     if valid.sum() < 2:  # no movement to measure the demonstration area from
         return None
     t = np.arange(n) / reader.fps

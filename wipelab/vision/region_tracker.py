@@ -994,7 +994,8 @@ class RegionTracker:
         self.candidates.static[-1 - len(self.candidates.static)] = (point.copy(), self.size)
         self.still_tracks.append((self._track_start, self.frame))
         self.size = None
-        self.areas = [deque(maxlen=120), deque(maxlen=120)]
+        for areas in self.areas:
+            areas.clear()
         self._stereo_points.clear()  # the plane the sponge moves in, too
         self._plane = None
         for background in self.backgrounds:
