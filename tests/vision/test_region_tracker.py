@@ -6,6 +6,7 @@ import numpy as np
 from wipelab.vision.calibration import StereoCalibration
 from wipelab.vision.colour_model import ColourSource
 from wipelab.vision.region_tracker import RegionTracker
+from wipelab.vision.table_plane import Plane
 
 FOCAL, SIZE, BASELINE = 300.0, (320, 240), 0.1
 ORANGE, SKIN = (20, 110, 240), (30, 120, 235)  # BGR: a vivid orange, a hand of a near hue
@@ -85,3 +86,17 @@ def test_after_following_a_still_thing_the_sponge_is_identified_anew():
     assert tracker.still_tracks == [(5, 100)]
     assert tracker.candidates.is_static(point, 0.1)
     assert not any(background.ghosts.any() for background in tracker.backgrounds)
+
+
+def test_the_plane_the_sponge_moves_in_lies_on_the_table_whatever_its_first_stereo_points():
+    """The first stereo points after the sponge is found can be centimetres off (a hand
+    hides its region differently in the two views): the plane of the sponge's point stays
+    between just under the table and a hand-held sponge's height above it."""
+    tracker, _ = _tracker()
+    tracker.table = Plane(np.array([0.0, -1.0, 0.0]), -0.1)  # 10 cm under the cameras' axis
+    for depth_below, expected in ((0.06, -0.03), (-0.12, 0.08), (0.02, -0.02)):
+        tracker._stereo_points.clear()
+        tracker._stereo_points.extend([np.array([0.0, 0.1 + depth_below, 1.0])] * 3)
+        tracker._refresh_plane(force=True)
+        height = tracker.sponge_plane().offset - tracker.table.offset
+        assert abs(height - expected) < 1e-9, (depth_below, height)

@@ -85,6 +85,63 @@ def test_a_cloth_passed_over_stays_a_still_thing_and_the_sponge_on_it_is_not_one
     assert still_now[cloth & ~sponge].mean() > 0.9  # the cloth beside it is
 
 
+def _shaded(frame: np.ndarray, t: int, width: int = 14, dim: float = 0.55) -> np.ndarray:
+    """``frame`` (of :func:`_frame` at ``t``) with the arm's shadow: a band ``width`` pixels
+    wide beside the arm, from the table's edge down to the cloth's lower half, darker by
+    ``dim``."""
+    x = int(80 + 45 * np.sin(2 * np.pi * t / 30))
+    shaded = frame.copy()
+    band = shaded[0:80, x + 10:x + 10 + width].astype(np.float64) * dim
+    shaded[0:80, x + 10:x + 10 + width] = band.astype(np.uint8)
+    return shaded
+
+
+def test_the_arms_shadow_on_a_cloth_leaves_the_cloth_a_still_thing_but_not_the_sponge():
+    """The arm shades the cloth beside it as it wipes: the shaded part of the cloth, which
+    moves with the arm, is still the cloth (the same hue and saturation, darker), while the
+    sponge on the cloth (the cloth's hue, more saturated) is not."""
+    rng = np.random.default_rng(4)
+    background = _background()
+    model = prior_model(NAMED_COLOURS["cyan"])
+    frames = [(_shaded(f, t), m) for t, (f, m) in
+              ((t, _frame(t, rng)) for t in range(0, 60, 2))]
+    images = np.stack([background.canvas_image(f) for f, _ in frames])
+    background.initialise(images, np.stack([model.back_project(i) > 0.5 for i in images]))
+    for t in range(60, 400, 3):
+        frame, sponge = _frame(t, rng)
+        frame = _shaded(frame, t)
+        region = _tracked_region(background, frame, sponge, model)
+        background.update(frame, (model,), [(region, np.zeros(2), 1)], GHOST)
+    t = 407  # the arm right of the middle, its shadow on the cloth
+    frame, sponge = _frame(t, rng)
+    frame = _shaded(frame, t)
+    x = int(80 + 45 * np.sin(2 * np.pi * t / 30))
+    shadow = np.zeros(SIZE[::-1], bool)
+    shadow[42:80, x + 11:x + 23] = True
+    shadow &= ~sponge
+    still_now = background.still_in_canvas_image(background.canvas_image(frame))
+    assert still_now[_canvas(background, shadow)].mean() > 0.9  # the shaded cloth
+    assert still_now[_canvas(background, sponge)].mean() < 0.05  # the sponge on it
+
+
+def test_a_still_thing_of_the_sponges_size_in_a_shadow_is_not_taken_for_itself():
+    """A still thing no larger than the sponge may be the sponge's own ghost (a sponge that
+    rested there): a darker thing of its colour there is the sponge's shaded side, not it."""
+    background = _background()
+    model = prior_model(NAMED_COLOURS["cyan"])
+    frame = np.full((SIZE[1], SIZE[0], 3), TABLE, np.uint8)
+    frame[50:66, 70:86] = CLOTH                     # a small still thing of the colour
+    images = np.stack([background.canvas_image(frame)] * 5)
+    background.initialise(images, np.stack([model.back_project(i) > 0.5 for i in images]))
+    background.update(frame, (model,), [], GHOST)
+    darker = frame.copy()
+    darker[50:66, 70:86] = (np.array(CLOTH) * 0.55).astype(np.uint8)
+    thing = _canvas(background, np.pad(np.ones((16, 16), bool), ((50, 54), (70, 74))))
+    assert background.still[thing].mean() > 0.9
+    assert background.still_in_canvas_image(background.canvas_image(darker))[thing].mean() \
+        < 0.05
+
+
 def test_a_resting_sponge_becomes_a_ghost_and_is_forgotten_under_the_region():
     rng = np.random.default_rng(1)
     background = _background()

@@ -73,6 +73,9 @@ SPONGE_HUE_ROUNDS = 3
 SPAN_SURROUNDINGS = 0.05
 #: Half side of the square around the sponge that :data:`SPAN_SURROUNDINGS` looks at, metres.
 SPAN_CHECK_REACH = 2 * LARGEST_SPONGE
+#: The plane the sponge's point moves in lies at most this far under the table's, metres:
+#: the sponge's stereo points and the table's dense stereo each miss by a centimetre or two.
+PLANE_BELOW_TABLE = 0.03
 #: A search widened beyond the named colour (:meth:`RegionTracker.widen_search`) takes hues
 #: this far beyond its box.
 SEARCH_HUE_WIDENING = 6.0
@@ -833,7 +836,16 @@ class RegionTracker:
         points = np.array(self._stereo_points)
         level = self.table if self.world_up is None else Plane(self.world_up, 0.0)
         if level is not None:
-            self._plane = level.shifted(float(np.median(level.distance(points))))
+            height = float(np.median(level.distance(points)))
+            if self.table is not None:
+                # the sponge lies on the table: its point is neither under the table nor
+                # higher than a hand-held sponge's (the first few stereo points, of regions
+                # that a hand hides differently in the two views, can be centimetres off)
+                on_table = points - self.table.distance(points)[:, None] * self.table.normal
+                floor = float(np.median(level.distance(on_table)))
+                height = min(max(height, floor - PLANE_BELOW_TABLE),
+                             floor + self.params.max_height)
+            self._plane = level.shifted(height)
         elif count >= 30:
             # no table plane (a plain, untextured table): the plane of the sponge's own
             # stereo points

@@ -46,6 +46,21 @@ def _largest_channel(difference: np.ndarray) -> np.ndarray:
 
 #: Background pixels well inside the sponge's region needed to learn how it looks.
 MIN_SPONGE_PIXELS = 5
+#: A pixel shows a still thing in another light (a shadow, or without the shadow the median
+#: took in) when its brightness (HSV value) is within these factors of the still thing's,
+#: and its hue and saturation (OpenCV units) within these.
+SHADE_BRIGHTNESS = (0.35, 2.5)
+SHADE_HUE = 6.0
+SHADE_SATURATION = 40.0
+
+
+def _chroma_distance(hsv: np.ndarray, hue, saturation) -> tuple[np.ndarray, np.ndarray]:
+    """Hue (circular) and saturation distances of HSV pixels (..., 3) from a hue and a
+    saturation (numbers or arrays), in units of :data:`SHADE_HUE` and
+    :data:`SHADE_SATURATION`."""
+    hue_off = np.abs(hsv[..., 0] - hue)
+    hue_off = np.minimum(hue_off, 180.0 - hue_off)
+    return hue_off / SHADE_HUE, np.abs(hsv[..., 1] - saturation) / SHADE_SATURATION
 
 
 class StaticBackground:
@@ -92,7 +107,10 @@ class StaticBackground:
         self.image = np.zeros(shape + (3,), np.float32)  # median appearance, BGR
         self.coloured = np.zeros(shape, bool)  # the median is of the sponge's colour
         self.ghosts = np.zeros(shape, bool)    # ... but it is the sponge itself
+        #: still things of the sponge's colour: 1, or 2 for those larger than any ghost
         self.still = np.zeros(shape, np.uint8)
+        #: background pixels a ghost of the sponge covers at most (None before an update)
+        self.ghost_limit: float | None = None
         self._mean: np.ndarray | None = None
         # the scene as the background first learnt it (BGR uint8), what a still thing must
         # still look like while the sponge is searched for: the median of the last seconds
@@ -172,6 +190,7 @@ class StaticBackground:
         self.coloured = coloured & self.in_frame
         self.ghosts &= self.coloured
         self.updates += 1
+        self.ghost_limit = max_ghost * self.scale ** 2
         self._classify()
         self._forget_ghosts(under, max_ghost)
 
@@ -183,12 +202,18 @@ class StaticBackground:
 
     def _classify(self) -> None:
         self.still = (self.coloured & ~self.ghosts).astype(np.uint8)
+        if self.ghost_limit is not None and self.still.any():
+            count, labels, stats, _ = cv2.connectedComponentsWithStats(self.still,
+                                                                        connectivity=8)
+            large = np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] > self.ghost_limit) + 1
+            if len(large):
+                self.still[np.isin(labels, large)] = 2
 
     def _forget_ghosts(self, under: np.ndarray, max_area: float) -> None:
         """A still thing that lies (nine tenths of it) under the sponge now is the sponge
         itself, mistaken for one while it rested or wiped a path smaller than itself: a
         ghost. A cloth or a plate the sponge is on reaches beyond it."""
-        if not (self.still & under).any():
+        if not ((self.still > 0) & (under > 0)).any():
             return
         count, labels, stats, _ = cv2.connectedComponentsWithStats(self.still, connectivity=8)
         covered = np.bincount(labels[under > 0], minlength=count)
@@ -285,7 +310,8 @@ class StaticBackground:
         and noise place them, and a pixel compared only with its own background pixel
         would leave a fringe of the colour round every square of a tablecloth of it."""
         height, width = image.shape[:2]
-        near = cv2.dilate(still, np.ones((2 * reach + 1, 2 * reach + 1), np.uint8))
+        near = cv2.dilate((still > 0).astype(np.uint8),
+                          np.ones((2 * reach + 1, 2 * reach + 1), np.uint8))
         unchanged = np.zeros((height, width), bool)
         x, y, w, h = cv2.boundingRect(near)  # compared only where still things are
         if w == 0:
@@ -309,8 +335,35 @@ class StaticBackground:
             # a sponge of a shade near the still thing's is more like itself than like it
             matched &= closest < _largest_channel(cv2.absdiff(
                 box, np.broadcast_to(self.sponge_bgr, box.shape).copy()))
+        large = cv2.dilate((still[y:y + h, x:x + w] == 2).astype(np.uint8),
+                           np.ones((2 * reach + 1, 2 * reach + 1), np.uint8))
+        if large.any():  # a cloth: the arm's shadow passes over it
+            matched |= (large > 0) & self._shaded(box, padded[reach:reach + h,
+                                                              reach:reach + w])
         unchanged[y:y + h, x:x + w] = (near[y:y + h, x:x + w] > 0) & matched
         return unchanged
+
+    def _shaded(self, image: np.ndarray, background: np.ndarray) -> np.ndarray:
+        """Where ``image`` shows ``background`` (both BGR uint8, the same size) in another
+        light: of its hue and saturation (within :data:`SHADE_HUE` and
+        :data:`SHADE_SATURATION`), brighter or darker (within :data:`SHADE_BRIGHTNESS`), and
+        more like it than like the sponge (:attr:`sponge_bgr`) in hue and saturation; the
+        chromaticity test of shadows of Cucchiara et al. (2003). The wiping arm shades a
+        cloth of the sponge's colour as it passes, and the median takes in the shade where
+        the arm passes most often: the cloth would be a thing of the colour that moves with
+        the arm."""
+        hsv = cv2.cvtColor(image, cv2.COLOR_BGR2HSV).astype(np.float32)
+        still = cv2.cvtColor(background, cv2.COLOR_BGR2HSV).astype(np.float32)
+        off_still = _chroma_distance(hsv, still[..., 0], still[..., 1])
+        low, high = SHADE_BRIGHTNESS
+        value, still_value = hsv[..., 2], still[..., 2]
+        shaded = ((value >= low * still_value) & (value <= high * still_value)
+                  & (off_still[0] <= 1.0) & (off_still[1] <= 1.0))
+        if self.sponge_bgr is not None:
+            sponge = cv2.cvtColor(self.sponge_bgr.reshape(1, 1, 3), cv2.COLOR_BGR2HSV)[0, 0]
+            off_sponge = _chroma_distance(hsv, float(sponge[0]), float(sponge[1]))
+            shaded &= off_still[0] + off_still[1] < off_sponge[0] + off_sponge[1]
+        return shaded
 
     def _background_pixels(self, canvas_points: np.ndarray) -> np.ndarray:
         """Background coordinates (..., 2) of canvas (full-resolution) points (..., 2): the
