@@ -100,3 +100,14 @@ def test_the_plane_the_sponge_moves_in_lies_on_the_table_whatever_its_first_ster
         tracker._refresh_plane(force=True)
         height = tracker.sponge_plane().offset - tracker.table.offset
         assert abs(height - expected) < 1e-9, (depth_below, height)
+
+
+def test_a_still_thing_found_again_after_a_short_loss_was_followed_since_it_showed_still():
+    """Lost for a few frames and found again, the still thing's track is one track: all of
+    the frames that showed it still are dropped, not only those since it was found again."""
+    tracker, point = _tracker()
+    tracker._track_start = 80  # found again 20 frames before it is known to be still
+    _followed(tracker, np.repeat(point[None], 100, axis=0))
+    tracker._forget_track(point)
+    window = round(tracker.params.still_seconds * tracker.params.acquisition.fps)
+    assert tracker.still_tracks == [(100 - window + 1, 100)]

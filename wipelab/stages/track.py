@@ -413,13 +413,14 @@ def _run_tracker(tracker: SpongeTracker, reader: ReplayedStart, params: TrackPar
             elif k < first + SEED_FRAMES:  # the region's points of the first valid frames
                 seed = [p for f, p in tracker.region.history if f >= first] or seed
             bar.update()
-    if before_first and seed:
+    still_tracks = list(tracker.region.still_tracks)  # the backward pass restarts the tracker
+    if before_first and seed and not any(start <= first < end for start, end in still_tracks):
+        # (a first track that followed a still thing leads back to nothing but it)
         track_backwards(tracker, seed, reversed(before_first), keep)
     dropped = np.zeros(n, bool)
-    for start, end in tracker.region.still_tracks:
-        # what was followed there stood still: a cloth or a plate, not the sponge (from the
-        # video's start when the frames before it were followed backwards from it)
-        dropped[0 if first is not None and start <= first else start:end] = True
+    for start, end in still_tracks:
+        # what was followed there stood still: a cloth or a plate, not the sponge
+        dropped[start:end] = True
     dropped |= fleeting_runs(valid & ~dropped, reader.fps)
     valid[dropped], poses[dropped], quality[dropped] = False, np.nan, QUALITY_NONE
     if valid.sum() < 2:  # no movement to measure the demonstration area from

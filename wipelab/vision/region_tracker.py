@@ -1004,7 +1004,11 @@ class RegionTracker:
         are unknown again: both were learnt from the still thing). The still thing was taken
         for the sponge's ghost in the backgrounds; it is a still thing of them again."""
         self.candidates.static[-1 - len(self.candidates.static)] = (point.copy(), self.size)
-        self.still_tracks.append((self._track_start, self.frame))
+        # it was followed since it was found, or since the first of the frames that showed it
+        # still (a short loss and a find of the same thing again in between)
+        window = int(round(self.params.still_seconds * self.params.acquisition.fps))
+        since = [f for f, _ in self._valid_points if self.frame - window < f <= self.frame]
+        self.still_tracks.append((min([self._track_start] + since), self.frame))
         self.size = None
         for areas in self.areas:
             areas.clear()
