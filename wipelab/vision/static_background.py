@@ -21,6 +21,11 @@ would vanish into it: each update also learns how the sponge looks in the camera
 region's median colour), and a pixel more like the sponge than like the still thing at its
 place is not the still thing.
 
+The wiping arm shades a cloth as it passes, and the median takes in the shade where the arm
+passes most often: on a still thing larger than any ghost of the sponge, a pixel of its hue
+and saturation that is only darker or brighter is still that thing (the chromaticity test of
+shadows, Cucchiara et al. 2003), unless it is more like the sponge.
+
 A pixel next to a still thing still shows it when it matches the background at its place
 or a background pixel away: the edges of a checkered or grained thing move by a pixel as the
 low-resolution background, compression and noise place them.
@@ -203,8 +208,7 @@ class StaticBackground:
     def _classify(self) -> None:
         self.still = (self.coloured & ~self.ghosts).astype(np.uint8)
         if self.ghost_limit is not None and self.still.any():
-            count, labels, stats, _ = cv2.connectedComponentsWithStats(self.still,
-                                                                        connectivity=8)
+            _, labels, stats, _ = cv2.connectedComponentsWithStats(self.still, connectivity=8)
             large = np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] > self.ghost_limit) + 1
             if len(large):
                 self.still[np.isin(labels, large)] = 2
