@@ -81,6 +81,11 @@ def hue_range(images_bgr: list[np.ndarray], masks: list[np.ndarray], near: float
     return float(near + low) % 180.0, float(near + low) % 180.0 + float(high - low)
 
 
+def hue_distance(hue, other):
+    """Circular distance between OpenCV hues (0-179; numbers or arrays)."""
+    return np.abs((hue - other + 90.0) % 180.0 - 90.0)
+
+
 def prior_model(colour: HsvRange, hue_margin: float = HUE_MARGIN,
                 saturation_margin: float = SATURATION_MARGIN) -> ColourModel:
     """A colour model that reads 1 inside the HSV box ``colour`` and falls off linearly to 0
@@ -89,7 +94,7 @@ def prior_model(colour: HsvRange, hue_margin: float = HUE_MARGIN,
     hue = (np.arange(H_BINS) + 0.5) * 180.0 / H_BINS
     saturation = (np.arange(S_BINS) + 0.5) * 256.0 / S_BINS
     centre, half = _hue_centre_and_half(colour)
-    distance = np.abs((hue - centre + 90.0) % 180.0 - 90.0)  # circular hue distance
+    distance = hue_distance(hue, centre)
     hue_membership = np.clip(1.0 - (distance - half) / hue_margin, 0.0, 1.0)
     saturation_membership = np.clip(
         1.0 - np.maximum(colour.low[1] - saturation, saturation - colour.high[1])

@@ -982,11 +982,16 @@ class RegionTracker:
                 self.ray_changes.append(self._ray_change)
         self._ray_change = None
 
+    @property
+    def _still_window(self) -> int:
+        """Frames over which a still thing keeps still (``still_seconds``)."""
+        return int(round(self.params.still_seconds * self.params.acquisition.fps))
+
     def _kept_still(self, point: np.ndarray) -> bool:
         """Whether, with ``point``, the tracked thing has kept still over the last
         ``still_seconds`` (seen in most of those frames)."""
         p = self.params
-        window = int(round(p.still_seconds * p.acquisition.fps))
+        window = self._still_window
         recent = [point]
         for f, q in reversed(self._valid_points):  # the newest first
             if self.frame - f >= window:
@@ -1006,8 +1011,8 @@ class RegionTracker:
         self.candidates.static[-1 - len(self.candidates.static)] = (point.copy(), self.size)
         # it was followed since it was found, or since the first of the frames that showed it
         # still (a short loss and a find of the same thing again in between)
-        window = int(round(self.params.still_seconds * self.params.acquisition.fps))
-        since = [f for f, _ in self._valid_points if self.frame - window < f <= self.frame]
+        since = [f for f, _ in self._valid_points
+                 if self.frame - self._still_window < f <= self.frame]
         self.still_tracks.append((min([self._track_start] + since), self.frame))
         self.size = None
         for areas in self.areas:

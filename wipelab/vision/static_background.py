@@ -41,6 +41,7 @@ import cv2
 import numpy as np
 
 from wipelab.vision.colour_model import ColourModel
+from wipelab.vision.colour_regions import hue_distance
 from wipelab.vision.undistortion import Undistorter
 
 
@@ -63,9 +64,8 @@ def _chroma_distance(hsv: np.ndarray, hue, saturation) -> tuple[np.ndarray, np.n
     """Hue (circular) and saturation distances of HSV pixels (..., 3) from a hue and a
     saturation (numbers or arrays), in units of :data:`SHADE_HUE` and
     :data:`SHADE_SATURATION`."""
-    hue_off = np.abs(hsv[..., 0] - hue)
-    hue_off = np.minimum(hue_off, 180.0 - hue_off)
-    return hue_off / SHADE_HUE, np.abs(hsv[..., 1] - saturation) / SHADE_SATURATION
+    return (hue_distance(hsv[..., 0], hue) / SHADE_HUE,
+            np.abs(hsv[..., 1] - saturation) / SHADE_SATURATION)
 
 
 class StaticBackground:
