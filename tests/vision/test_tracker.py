@@ -12,8 +12,9 @@ from wipelab.vision.calibration import load_calibration
 from wipelab.vision.colour_model import ColourSource, vivid_part
 from wipelab.vision.projection import invert_transform, transform_points
 from wipelab.vision.sponge_box import SpongeBox
+from wipelab.vision.region_tracker import RegionTrackerParams
 from wipelab.vision.tracker import (SpongeTracker, TrackerParams, commonest_failure,
-                                    fleeting_runs)
+                                    fleeting_runs, still_runs)
 from wipelab.vision.undistortion import pinhole
 from wipelab.vision.video_io import StereoVideoReader
 
@@ -183,6 +184,33 @@ def test_valid_runs_of_at_most_a_fifth_of_a_second_between_losses_are_fleeting()
     assert np.array_equal(fleeting, expected)
     assert fleeting_runs(valid, fps=60.0)[20:27].all()   # 7 frames at 60 fps: 0.12 s
     assert not fleeting_runs(np.ones(5, bool), fps=30.0).any()
+
+
+def test_runs_that_keep_still_after_the_sponge_moved_are_still_things_not_the_sponge():
+    """A 0.08 m sponge: a run after the first moving one whose points keep within 2 cm (a
+    quarter of its size) is a still thing, however short or long; a still run before it is
+    the sponge resting where it started; pieces of one run split by a short gap are judged
+    together."""
+    n = 240
+    valid = np.zeros(n, bool)
+    points = np.zeros((n, 3))
+    t = np.arange(n) / 30.0
+    circle = np.stack([0.1 * np.cos(2 * np.pi * t), 0.1 * np.sin(2 * np.pi * t),
+                       np.full(n, 0.6)], axis=1)
+    rest, patch = np.array([0.1, 0.0, 0.6]), np.array([-0.3, 0.2, 0.6])
+    jitter = 0.004 * np.sin(np.arange(n))[:, None]
+    for start, end, where in [(0, 10, rest), (20, 60, circle), (80, 87, patch),
+                              (100, 108, patch), (110, 130, circle), (150, 240, patch)]:
+        valid[start:end] = True
+        points[start:end] = (where[start:end] if where.ndim == 2 else where) + jitter[start:end]
+    still = still_runs(valid, points, 0.08, RegionTrackerParams())
+    expected = np.zeros(n, bool)
+    expected[80:87] = expected[150:240] = True
+    assert np.array_equal(still, expected)
+    # with points spread a little wider than a quarter of the sponge, the patch moved
+    spread = points.copy()
+    spread[80:87, 0] += np.linspace(-0.05, 0.05, 7)
+    assert not still_runs(valid, spread, 0.08, RegionTrackerParams())[80:87].any()
 
 
 def test_the_commonest_failure_is_named_in_a_users_terms():

@@ -59,7 +59,7 @@ from wipelab.vision.projection import invert_transform
 from wipelab.vision.sponge_box import CORNER_SIGNS, EDGES, SpongeBox, yaw_rotation
 from wipelab.vision.tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_MONO, QUALITY_NONE,
                                     FrameEstimate, SpongeTracker, TrackerParams,
-                                    commonest_failure, fleeting_runs)
+                                    commonest_failure, fleeting_runs, still_runs)
 from wipelab.vision.video_io import H264Writer, ReplayedStart, StereoVideoReader
 
 DEFAULT_COLOUR = "yellow"
@@ -340,7 +340,8 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
     pass from the first frame (so that the first seconds are tracked too); the frames before
     that pass's first valid one are then followed backwards from it
     (:func:`track_backwards`). Runs of valid frames too short to be the sponge are then
-    dropped (:func:`~wipelab.vision.tracker.fleeting_runs`). The tracking pass replays the
+    dropped (:func:`~wipelab.vision.tracker.fleeting_runs`), and so are those that kept
+    still once the sponge had moved (:func:`~wipelab.vision.tracker.still_runs`). The tracking pass replays the
     frames the warm-up decoded from memory (up to :data:`WARMUP_BYTES`) rather than decoding
     them again. ``on_frame`` is called with each frame's index and estimate of the tracking
     pass, ``frame_sink`` with each of its frame pairs.
@@ -422,6 +423,8 @@ def _run_tracker(tracker: SpongeTracker, reader: ReplayedStart, params: TrackPar
         # what was followed there stood still: a cloth or a plate, not the sponge
         dropped[start:end] = True
     dropped |= fleeting_runs(valid & ~dropped, reader.fps)
+    dropped |= still_runs(valid & ~dropped, poses[:, :3], tracker.region.size or 0.0,
+                          tracker.params.region)
     valid[dropped], poses[dropped], quality[dropped] = False, np.nan, QUALITY_NONE
     if valid.sum() < 2:  # no movement to measure the demonstration area from
         return None

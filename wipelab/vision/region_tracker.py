@@ -157,6 +157,15 @@ class RegionTrackerParams:
     still_share: float = 0.25
 
 
+def keeps_still(points: np.ndarray, size: float, params: RegionTrackerParams) -> bool:
+    """Whether a thing tracked at ``points`` (n, 3), metres, of ``size`` metres stood still:
+    nine in ten of its points lie within ``params.still_travel`` metres or
+    ``params.still_share`` of its size of their median."""
+    spread = np.linalg.norm(points - np.median(points, axis=0), axis=1)
+    return float(np.percentile(spread, 90)) < max(params.still_travel,
+                                                   params.still_share * size)
+
+
 @dataclass
 class RegionEstimate:
     """The tracker's answer for one frame pair.
@@ -999,9 +1008,7 @@ class RegionTracker:
             recent.append(q)
         if len(recent) < 0.8 * window:
             return False
-        recent = np.array(recent)
-        spread = np.linalg.norm(recent - np.median(recent, axis=0), axis=1)
-        return float(np.percentile(spread, 90)) < max(p.still_travel, p.still_share * self.size)
+        return keeps_still(np.array(recent), self.size, p)
 
     def _forget_track(self, point: np.ndarray) -> None:
         """The tracker followed a still thing: remember it as one and identify the sponge

@@ -17,8 +17,8 @@ Two estimators share the work:
 
 A frame is reported valid only when the estimate that stands is backed by both images; a
 distractor, a stale estimate or a guess during an occlusion is never valid. Looking back over
-a whole video, a valid run too short to be the sponge found again (:func:`fleeting_runs`) is
-not valid either.
+a whole video, a valid run too short to be the sponge found again (:func:`fleeting_runs`),
+or one that kept still once the sponge had wiped (:func:`still_runs`), is not valid either.
 """
 
 from __future__ import annotations
@@ -33,12 +33,13 @@ from wipelab.vision.calibration import StereoCalibration
 from wipelab.vision.colour_model import ColourSource, LinearColourFeature
 from wipelab.vision.projection import invert_transform, transform_points
 from wipelab.vision.region_tracker import (QUALITY_BOX, QUALITY_CENTROID, QUALITY_MONO,
-                                           QUALITY_NONE, RegionTracker, RegionTrackerParams)
+                                           QUALITY_NONE, RegionTracker, RegionTrackerParams,
+                                           keeps_still)
 from wipelab.vision.particle_filter import wrap_half_turn
 from wipelab.vision.sponge_box import SpongeBox
 from wipelab.vision.table_plane import table_axes
 
-__all__ = ["TrackerParams", "FrameEstimate", "SpongeTracker", "fleeting_runs",
+__all__ = ["TrackerParams", "FrameEstimate", "SpongeTracker", "fleeting_runs", "still_runs",
            "commonest_failure",
            "QUALITY_BOX", "QUALITY_CENTROID", "QUALITY_MONO", "QUALITY_NONE"]
 
@@ -60,6 +61,33 @@ def fleeting_runs(valid: np.ndarray, fps: float, longest_s: float = FLEETING_RUN
         if end - start <= longest and end < len(valid):
             fleeting[start:end] = True
     return fleeting
+
+
+def still_runs(valid: np.ndarray, points: np.ndarray, size: float,
+               params: RegionTrackerParams) -> np.ndarray:
+    """The frames (bool mask, shape of ``valid``) of the runs of valid frames after the
+    first one that moved whose ``points`` (n, 3), metres, kept still
+    (:func:`~wipelab.vision.region_tracker.keeps_still` for a thing of ``size``): a
+    sponge-sized patch of a cloth, a cup or a plate found where the sponge was lost,
+    whatever the run's length (the tracker forgets one only after ``params.still_seconds``);
+    once it wipes, the sponge moves. Still runs before the first that moved are the sponge
+    resting where the demonstration starts. A run goes on over gaps of up to
+    ``params.coast_frames`` frames (the tracker loses the sponge only after longer ones)."""
+    still = np.zeros(len(valid), bool)
+    runs: list[list[int]] = []
+    for start, end in true_runs(valid):
+        if runs and start - runs[-1][1] <= params.coast_frames:
+            runs[-1][1] = end
+        else:
+            runs.append([start, end])
+    moved = False
+    for start, end in runs:
+        inside = np.flatnonzero(valid[start:end]) + start
+        if not keeps_still(points[inside], size, params):
+            moved = True
+        elif moved:
+            still[inside] = True
+    return still
 
 
 #: Why frames were not valid, by words of the region tracker's reasons, in the terms a user
