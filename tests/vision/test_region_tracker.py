@@ -21,6 +21,7 @@ def _tracker() -> tuple[RegionTracker, np.ndarray]:
     point = np.array([0.0, 0.05, 1.0])
     tracker.size, tracker.model = 0.1, tracker.prior
     tracker.history.append((0, point))
+    tracker._table_centre = point.copy()
     tracker.frame = 0
     return tracker, point
 
@@ -88,6 +89,28 @@ def test_after_following_a_still_thing_the_sponge_is_identified_anew():
     assert not any(background.ghosts.any() for background in tracker.backgrounds)
 
 
+def test_a_still_thing_found_after_the_sponge_wiped_is_forgotten_but_not_the_sponge():
+    """Tracked wiping for 100 frames, then lost and "found" as a cup that stayed put for
+    100 frames: the cup's frames are a still track and the cup a still thing, but the
+    sponge (its size, the plane it moves in, where it wiped) is still known and searched
+    for from the next frame."""
+    tracker, point = _tracker()
+    t = np.arange(100) / 30.0
+    wiping = point + 0.1 * np.stack([np.sin(2 * np.pi * t), np.zeros_like(t),
+                                     np.zeros_like(t)], 1)
+    cup = point + np.array([0.3, 0.0, 0.0])
+    _followed(tracker, np.concatenate([wiping, np.repeat(cup[None], 100, axis=0)]))
+    tracker._stereo_points.extend((f, q) for f, q in tracker._valid_points)
+    tracker._track_start = 100
+    tracker._forget_track(cup)
+    assert tracker.identified and tracker.size == 0.1
+    assert tracker.still_tracks == [(100, 200)]
+    assert tracker.candidates.is_static(cup, 0.1)
+    assert [f for f, _ in tracker._valid_points] == list(range(100))
+    assert max(f for f, _ in tracker._stereo_points) == 99
+    assert tracker.failures > tracker.params.coast_frames and not tracker.history
+
+
 def test_the_plane_the_sponge_moves_in_lies_on_the_table_whatever_its_first_stereo_points():
     """The first stereo points after the sponge is found can be centimetres off (a hand
     hides its region differently in the two views): the plane of the sponge's point stays
@@ -96,7 +119,7 @@ def test_the_plane_the_sponge_moves_in_lies_on_the_table_whatever_its_first_ster
     tracker.table = Plane(np.array([0.0, -1.0, 0.0]), -0.1)  # 10 cm under the cameras' axis
     for depth_below, expected in ((0.06, -0.03), (-0.12, 0.08), (0.02, -0.02)):
         tracker._stereo_points.clear()
-        tracker._stereo_points.extend([np.array([0.0, 0.1 + depth_below, 1.0])] * 3)
+        tracker._stereo_points.extend([(0, np.array([0.0, 0.1 + depth_below, 1.0]))] * 3)
         tracker._refresh_plane(force=True)
         height = tracker.sponge_plane().offset - tracker.table.offset
         assert abs(height - expected) < 1e-9, (depth_below, height)

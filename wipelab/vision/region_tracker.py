@@ -304,7 +304,7 @@ class RegionTracker:
         self.failures = 0
         self.valid_count = 0
         self.frames_with_candidates = 0  # before identification: frames showing the colour
-        self._stereo_points: deque[np.ndarray] = deque(maxlen=900)
+        self._stereo_points: deque[tuple[int, np.ndarray]] = deque(maxlen=900)  # (frame, point)
         self._statistics: dict[str, tuple] = {}
         self._valid_points: deque[tuple[int, np.ndarray]] = deque(maxlen=600)  # (frame, point)
         self._last_seen: np.ndarray | None = None
@@ -842,7 +842,7 @@ class RegionTracker:
         count = len(self._stereo_points)
         if count == 0 or (not force and count > 30 and count % 10):
             return
-        points = np.array(self._stereo_points)
+        points = np.array([point for _, point in self._stereo_points])
         level = self.table if self.world_up is None else Plane(self.world_up, 0.0)
         if level is not None:
             height = float(np.median(level.distance(points)))
@@ -978,7 +978,7 @@ class RegionTracker:
             # low-resolution frames)
             self.size = float(np.sqrt(np.median(self.areas[0]) + np.median(self.areas[1])) / np.sqrt(2.0))
         if len(good) == 2 and np.all(np.isfinite(stereo)):
-            self._stereo_points.append(stereo)
+            self._stereo_points.append((self.frame, stereo))
             self._refresh_plane()
         p = self.params
         if len(self._table_points) + len(self._table_jobs) < p.table_pairs and \
@@ -1011,27 +1011,40 @@ class RegionTracker:
         return keeps_still(np.array(recent), self.size, p)
 
     def _forget_track(self, point: np.ndarray) -> None:
-        """The tracker followed a still thing: remember it as one and identify the sponge
-        anew among the moving things of its colour (where it has been wiping and its size
-        are unknown again: both were learnt from the still thing). The still thing was taken
-        for the sponge's ghost in the backgrounds; it is a still thing of them again."""
+        """The tracker followed a still thing: remember it as one. When what was tracked
+        before it moved (the sponge, identified right, then lost and "found" as this thing),
+        go on searching for that sponge without the still thing's frames; otherwise identify
+        the sponge anew among the moving things of its colour (where it has been wiping and
+        its size are unknown again: both were learnt from the still thing). The still thing
+        was taken for the sponge's ghost in the backgrounds; it is a still thing of them
+        again."""
         self.candidates.static[-1 - len(self.candidates.static)] = (point.copy(), self.size)
         # it was followed since it was found, or since the first of the frames that showed it
         # still (a short loss and a find of the same thing again in between)
         since = [f for f, _ in self._valid_points
                  if self.frame - self._still_window < f <= self.frame]
-        self.still_tracks.append((min([self._track_start] + since), self.frame))
+        start = min([self._track_start] + since)
+        self.still_tracks.append((start, self.frame))
+        before = [(f, q) for f, q in self._valid_points if f < start]
+        for background in self.backgrounds:
+            background.forget_ghosts()
+        self.history.clear()
+        self._last_seen = None
+        self.failures = self.params.coast_frames
+        if len(before) >= self._still_window // 2 and \
+                not keeps_still(np.array([q for _, q in before]), self.size, self.params):
+            self._valid_points = deque(before, maxlen=self._valid_points.maxlen)
+            self._stereo_points = deque([(f, q) for f, q in self._stereo_points if f < start],
+                                        maxlen=self._stereo_points.maxlen)
+            self._refresh_plane(force=True)
+            self.failures = self.params.coast_frames + 1  # search again from the next frame
+            return
         self.size = None
         for areas in self.areas:
             areas.clear()
         self._stereo_points.clear()  # the plane the sponge moves in, too
         self._plane = None
-        for background in self.backgrounds:
-            background.forget_ghosts()
-        self.history.clear()
         self._valid_points.clear()
-        self._last_seen = None
-        self.failures = self.params.coast_frames
 
     def _fail(self, rays, areas, stereo, reason: str) -> RegionEstimate:
         self.failures += 1
