@@ -341,9 +341,9 @@ def run_tracker(tracker: SpongeTracker, reader: StereoVideoReader, params: Track
     that pass's first valid one are then followed backwards from it
     (:func:`track_backwards`). Runs of valid frames too short to be the sponge are then
     dropped (:func:`~wipelab.vision.tracker.fleeting_runs`), and so are those that kept
-    still once the sponge had moved (:func:`~wipelab.vision.tracker.still_runs`). The tracking pass replays the
-    frames the warm-up decoded from memory (up to :data:`WARMUP_BYTES`) rather than decoding
-    them again. ``on_frame`` is called with each frame's index and estimate of the tracking
+    still once the sponge had moved (:func:`~wipelab.vision.tracker.still_runs`). The
+    tracking pass replays the frames the warm-up decoded from memory (up to
+    :data:`WARMUP_BYTES`) rather than decoding them again. ``on_frame`` is called with each frame's index and estimate of the tracking
     pass, ``frame_sink`` with each of its frame pairs.
     """
     replayed = ReplayedStart(reader, WARMUP_BYTES)

@@ -1030,7 +1030,6 @@ class RegionTracker:
             background.forget_ghosts()
         self.history.clear()
         self._last_seen = None
-        self.failures = self.params.coast_frames
         if len(before) >= self._still_window // 2 and \
                 not keeps_still(np.array([q for _, q in before]), self.size, self.params):
             self._valid_points = deque(before, maxlen=self._valid_points.maxlen)
@@ -1039,6 +1038,7 @@ class RegionTracker:
             self._refresh_plane(force=True)
             self.failures = self.params.coast_frames + 1  # search again from the next frame
             return
+        self.failures = self.params.coast_frames  # the search for a moving sponge takes over
         self.size = None
         for areas in self.areas:
             areas.clear()
