@@ -337,7 +337,8 @@ def lost_throughput(demo: Demo) -> float:
     opened = open_demo(demo.path)
     source = ColourSource(name=demo.colour)
     sponge = SpongeBox() if (demo.path / "demo.toml").is_file() else None
-    tracker = SpongeTracker(opened.calibration, source, TrackerParams(sponge=sponge))
+    tracker = SpongeTracker(opened.calibration, source,
+                            TrackerParams(sponge=sponge, fps=opened.reader.fps))
     times, lost, last = [], [], [None]
 
     def timed(k, estimate):
