@@ -134,3 +134,26 @@ def test_a_still_thing_found_again_after_a_short_loss_was_followed_since_it_show
     tracker._forget_track(point)
     window = round(tracker.params.still_seconds * tracker.params.acquisition.fps)
     assert tracker.still_tracks == [(100 - window + 1, 100)]
+
+
+def test_a_sponge_that_rested_then_wiped_slowly_is_identified_whole():
+    """The sponge rests for 3 s, then wipes a stroke smaller than itself: while it rested it
+    became a still thing of its colour (a ghost) that no point of the moving candidate's
+    path has at its middle; the ghost lies where the path went, so it is forgotten, and the
+    sponge's whole region (not what is left beside the ghost) gives its size."""
+    calibration = _tracker()[0].calibration
+    tracker = RegionTracker(calibration, ColourSource(name="orange"))
+    rest = np.array([0.0, 0.05, 1.0])
+    frame = 0
+    for frame in range(400):
+        t = max(0, frame - 90) / 30.0
+        tracker.step(*_frames(rest + [0.03 * (1 - np.cos(2 * np.pi * 0.7 * t)), 0, 0], False))
+        if tracker.identified:
+            break
+    assert tracker.identified and frame > 90
+    assert abs(tracker.size / (np.sqrt(30 * 20) / FOCAL) - 1) < 0.15
+    for later in range(frame + 1, frame + 31):
+        t = (later - 90) / 30.0
+        estimate = tracker.step(*_frames(
+            rest + [0.03 * (1 - np.cos(2 * np.pi * 0.7 * t)), 0, 0], False))
+        assert estimate.valid, (later, estimate.reason)

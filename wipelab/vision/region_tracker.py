@@ -485,11 +485,14 @@ class RegionTracker:
         path = track.recent(self.frame, self.params.acquisition.window)
         self._learn_backgrounds(frames=IDENTIFY_BACKGROUND_FRAMES)
         for view, background in zip(self.views, self.backgrounds):
-            # a sponge wiping a path smaller than itself is not a still thing of its colour
+            # a sponge wiping a path smaller than itself, or that rested where its path goes
+            # (it was no candidate then: still, it was taken away), is not a still thing of
+            # its colour
             pixels = np.array([view.pixel(point) for point in path])
             per_metre = view.focal / float(np.median([view.depth(point) for point in path]))
-            background.release(pixels, (LARGEST_SPONGE * per_metre) ** 2,
-                               0.25 * LARGEST_SPONGE * per_metre)
+            largest = (LARGEST_SPONGE * per_metre) ** 2
+            background.release(pixels, largest, 0.25 * LARGEST_SPONGE * per_metre)
+            background.release_visited(pixels, largest)
         if self._above_the_table(frames, track):
             self.candidates.rejected.add(track.ident)
             return False
