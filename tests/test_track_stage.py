@@ -183,8 +183,9 @@ def test_bad_input_is_one_line_exit_2_and_nothing_written(demo, tmp_path, breaka
 
 
 def test_the_track_command_does_not_load_the_simulator_or_numba():
-    """Without a known sponge box nothing of the track command needs a compiled kernel:
-    numba's import (~0.2 s) and kernel loading (~0.6 s) stay out of every run."""
+    """Importing the track command loads no compiled kernel: numba's import (~0.2 s) and
+    kernel loading (~0.6 s) stay out of every run that needs none (no known sponge box, no
+    still things of the sponge's colour)."""
     script = ("import sys, wipelab.cli, wipelab.stages.track, wipelab.vision.tracker\n"
               "print(sorted(m for m in ('pybullet', 'wipelab.sim.world', 'wipelab.learning',"
               " 'numba') if m in sys.modules))\n"

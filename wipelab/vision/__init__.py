@@ -26,7 +26,7 @@ Modules (one concept each):
 * :mod:`~wipelab.vision.table_plane`, :mod:`~wipelab.vision.table_stereo` - the plane the
   sponge slides on (dense stereo of the table) and points constrained to it;
 * :mod:`~wipelab.vision.static_background` - what each camera sees where the sponge is
-  not: still things of its colour;
+  not: still things of its colour (the per-pixel tests compiled in ``_still_kernel``);
 * :mod:`~wipelab.vision.region_tracker` - the sponge's colour region in both cameras,
   placed on the plane (needs only the sponge's colour);
 * :mod:`~wipelab.vision.box_tracker` - the box refinement: particle filter and Newton fit of

@@ -29,6 +29,7 @@ import math
 from collections import deque
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
+from typing import Callable, TypeVar
 
 import cv2
 import numpy as np
@@ -46,6 +47,8 @@ from wipelab.vision.static_background import StaticBackground
 from wipelab.vision.table_plane import Plane, fit_plane, points_on_plane
 from wipelab.vision.table_stereo import TableStereo
 from wipelab.vision.undistortion import Undistorter
+
+T = TypeVar("T")
 
 QUALITY_NONE, QUALITY_CENTROID, QUALITY_MONO, QUALITY_BOX = "", "centroid", "mono", "box"
 #: Length of the largest kitchen sponge (its visible area is under this squared), metres.
@@ -294,6 +297,7 @@ class RegionTracker:
         # table measurements running on a worker: (frame at which they are taken up, job)
         self._table_jobs: deque[tuple[int, Future]] = deque()
         self._table_worker: ThreadPoolExecutor | None = None
+        self._right_camera_worker: ThreadPoolExecutor | None = None  # see _per_camera
         self._table_centre: np.ndarray | None = None
         self.ray_offsets: deque[np.ndarray] = deque(maxlen=90)
         self.ray_changes: deque[float] = deque(maxlen=120)  # of accepted frames, / size
@@ -681,11 +685,23 @@ class RegionTracker:
         """Learn the frames into the static backgrounds, with the sponge's regions (per
         camera: (mask, origin, step); None: that camera is not learnt) under which still
         things are ghosts."""
-        for view, background, frame, region in zip(self.views, self.backgrounds, frames,
-                                                    regions):
-            if region is not None:
-                background.update(frame, (self.model, self.prior), [region],
-                                  self._largest_ghost(view, self.history[-1][1]))
+        def update(k: int) -> None:
+            if regions[k] is not None:
+                self.backgrounds[k].update(frames[k], (self.model, self.prior), [regions[k]],
+                                           self._largest_ghost(self.views[k],
+                                                               self.history[-1][1]))
+
+        self._per_camera(update)
+
+    def _per_camera(self, work: Callable[[int], T]) -> list[T]:
+        """``[work(0), work(1)]``: the left camera's part on the calling thread, the right
+        camera's at once on a worker (OpenCV and numpy's array loops release the
+        interpreter's lock, so the two run on two cores). ``work`` must touch only its own
+        camera's state."""
+        if self._right_camera_worker is None:
+            self._right_camera_worker = ThreadPoolExecutor(1, thread_name_prefix="wipelab-right")
+        right = self._right_camera_worker.submit(work, 1)
+        return [work(0), right.result()]
 
     def _region(self, view: _View, frame: np.ndarray, point: np.ndarray, slack: float,
                 background: StaticBackground | None = None):
@@ -726,8 +742,9 @@ class RegionTracker:
         axis_rays = np.full((2, 3), np.nan)
         areas = np.zeros(2)
         masks, problems = [None, None], ["not seen", "not seen"]
-        for k, (view, frame) in enumerate(zip(self.views, frames)):
-            region = self._region(view, frame, predicted, slack + 0.02, self.backgrounds[k])
+        regions = self._per_camera(lambda k: self._region(
+            self.views[k], frames[k], predicted, slack + 0.02, self.backgrounds[k]))
+        for k, region in enumerate(regions):
             if region is None:
                 continue
             rays[k], areas[k], axis_rays[k], masks[k], truncated = region

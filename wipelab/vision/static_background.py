@@ -41,13 +41,7 @@ import cv2
 import numpy as np
 
 from wipelab.vision.colour_model import ColourModel
-from wipelab.vision.colour_regions import hue_distance
 from wipelab.vision.undistortion import Undistorter
-
-
-def _largest_channel(difference: np.ndarray) -> np.ndarray:
-    """The largest of the three channels (h, w) of a uint8 image (h, w, 3)."""
-    return np.maximum(np.maximum(difference[..., 0], difference[..., 1]), difference[..., 2])
 
 
 #: Background pixels well inside the sponge's region needed to learn how it looks.
@@ -58,14 +52,8 @@ MIN_SPONGE_PIXELS = 5
 SHADE_BRIGHTNESS = (0.35, 2.5)
 SHADE_HUE = 6.0
 SHADE_SATURATION = 40.0
-
-
-def _chroma_distance(hsv: np.ndarray, hue, saturation) -> tuple[np.ndarray, np.ndarray]:
-    """Hue (circular) and saturation distances of HSV pixels (..., 3) from a hue and a
-    saturation (numbers or arrays), in units of :data:`SHADE_HUE` and
-    :data:`SHADE_SATURATION`."""
-    return (hue_distance(hsv[..., 0], hue) / SHADE_HUE,
-            np.abs(hsv[..., 1] - saturation) / SHADE_SATURATION)
+#: The four as the kernel takes them.
+SHADE = np.array([*SHADE_BRIGHTNESS, SHADE_HUE, SHADE_SATURATION], np.float32)
 
 
 class StaticBackground:
@@ -327,47 +315,26 @@ class StaticBackground:
                                     reach - min(x, reach), reach - min(width - x - w, reach),
                                     cv2.BORDER_REPLICATE)
         box = image[y:y + h, x:x + w]
-        closest = np.full((h, w), 255, np.uint8)  # to the background, largest channel
-        for dy, dx in ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1),
-                       (1, 1)):
-            top, left = reach + dy * reach, reach + dx * reach
-            np.minimum(closest, _largest_channel(cv2.absdiff(box, padded[top:top + h,
-                                                                          left:left + w])),
-                       out=closest)
-        matched = closest < self.difference
-        if self.sponge_bgr is not None:
-            # a sponge of a shade near the still thing's is more like itself than like it
-            matched &= closest < _largest_channel(cv2.absdiff(
-                box, np.broadcast_to(self.sponge_bgr, box.shape).copy()))
         large = cv2.dilate((still[y:y + h, x:x + w] == 2).astype(np.uint8),
                            np.ones((2 * reach + 1, 2 * reach + 1), np.uint8))
         if large.any():  # a cloth: the arm's shadow passes over it
-            matched |= (large > 0) & self._shaded(box, padded[reach:reach + h,
-                                                              reach:reach + w])
-        unchanged[y:y + h, x:x + w] = (near[y:y + h, x:x + w] > 0) & matched
-        return unchanged
-
-    def _shaded(self, image: np.ndarray, background: np.ndarray) -> np.ndarray:
-        """Where ``image`` shows ``background`` (both BGR uint8, the same size) in another
-        light: of its hue and saturation (within :data:`SHADE_HUE` and
-        :data:`SHADE_SATURATION`), brighter or darker (within :data:`SHADE_BRIGHTNESS`), and
-        more like it than like the sponge (:attr:`sponge_bgr`) in hue and saturation; the
-        chromaticity test of shadows of Cucchiara et al. (2003). The wiping arm shades a
-        cloth of the sponge's colour as it passes, and the median takes in the shade where
-        the arm passes most often: the cloth would be a thing of the colour that moves with
-        the arm."""
-        hsv = cv2.cvtColor(image, cv2.COLOR_BGR2HSV).astype(np.float32)
-        still = cv2.cvtColor(background, cv2.COLOR_BGR2HSV).astype(np.float32)
-        off_still = _chroma_distance(hsv, still[..., 0], still[..., 1])
-        low, high = SHADE_BRIGHTNESS
-        value, still_value = hsv[..., 2], still[..., 2]
-        shaded = ((value >= low * still_value) & (value <= high * still_value)
-                  & (off_still[0] <= 1.0) & (off_still[1] <= 1.0))
+            box_hsv = cv2.cvtColor(box, cv2.COLOR_BGR2HSV)
+            background_hsv = cv2.cvtColor(padded[reach:reach + h, reach:reach + w],
+                                          cv2.COLOR_BGR2HSV)
+        else:
+            box_hsv = background_hsv = np.zeros((1, 1, 3), np.uint8)
+        sponge_bgr = sponge_hs = None
         if self.sponge_bgr is not None:
-            sponge = cv2.cvtColor(self.sponge_bgr.reshape(1, 1, 3), cv2.COLOR_BGR2HSV)[0, 0]
-            off_sponge = _chroma_distance(hsv, float(sponge[0]), float(sponge[1]))
-            shaded &= off_still[0] + off_still[1] < off_sponge[0] + off_sponge[1]
-        return shaded
+            sponge_bgr = self.sponge_bgr.astype(np.int64)
+            sponge_hs = cv2.cvtColor(self.sponge_bgr.reshape(1, 1, 3),
+                                     cv2.COLOR_BGR2HSV)[0, 0, :2].astype(np.float32)
+        # numba (its import and the kernel's loading, ~0.5 s) only for videos with still
+        # things of the sponge's colour
+        from wipelab.vision._still_kernel import unchanged_pixels
+        unchanged[y:y + h, x:x + w] = unchanged_pixels(
+            np.ascontiguousarray(box), padded, reach, np.ascontiguousarray(near[y:y + h, x:x + w]),
+            large, box_hsv, background_hsv, self.difference, sponge_bgr, sponge_hs, SHADE)
+        return unchanged
 
     def _background_pixels(self, canvas_points: np.ndarray) -> np.ndarray:
         """Background coordinates (..., 2) of canvas (full-resolution) points (..., 2): the
