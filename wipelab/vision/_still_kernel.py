@@ -21,7 +21,9 @@ _F90, _F180 = np.float32(90.0), np.float32(180.0)
 
 @njit(cache=True, nogil=True, inline="always")
 def _hue_distance(hue, other):
-    """Circular distance of two OpenCV hues (float32)."""
+    """Circular distance of two OpenCV hues, in float32 (the arithmetic of
+    :func:`wipelab.vision.colour_regions.hue_distance` on float32 images; that function,
+    compiled as it is, would divide in float64 against its float64 literals)."""
     return abs((hue - other + _F90) % _F180 - _F90)
 
 
