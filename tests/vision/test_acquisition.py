@@ -119,3 +119,27 @@ def test_a_remembered_still_thing_that_seems_to_move_is_not_picked():
     remembered = CandidateTracks()
     remembered.static[-1] = (cloth, 0.2)
     assert follow(remembered) is None
+
+
+def test_a_still_things_track_that_lost_its_blob_does_not_take_over_one_far_away():
+    """Development scene 409: an orange plate's track (16 cm) lost its blob when the
+    background learnt the plate; four frames later its gate, grown by its size per frame,
+    reached 69 cm and it took over the bare arm's candidate, whose jump then read as the
+    motion of a wiping sponge (the arm was identified; 42 mm shape RMS, valid frames while
+    the sponge was hidden). Its gate grows at most by a sponge's fastest speed."""
+    tracks = CandidateTracks()
+    plate, arm = np.array([-0.44, -0.08, 1.25]), np.array([0.22, -0.25, 1.24])
+    for frame in range(22):
+        tracks.update(frame, [_candidate(plate, 0.16)])
+    (track,) = tracks.tracks
+    for frame in range(22, 26):  # the plate is gone from the search
+        tracks.update(frame, [])
+    tracks.update(26, [_candidate(arm, 0.17)])
+    assert np.allclose(track.last_point, plate) and len(tracks.tracks) == 2
+    # a sponge hidden for a few frames is still followed: the gate still grows
+    hidden = CandidateTracks()
+    for frame in range(10):
+        hidden.update(frame, [_candidate(np.array([0.0, 0.0, 1.0]) + [0.03 * frame, 0, 0],
+                                         0.09)])
+    hidden.update(14, [_candidate(np.array([0.42, 0.0, 1.0]), 0.09)])
+    assert len(hidden.tracks) == 1 and len(hidden.tracks[0].frames) == 11

@@ -284,6 +284,11 @@ class AcquisitionParams:
         (plus ``gate_floor``).
     gate_floor : float
         Metres.
+    max_speed : float
+        Fastest a wiping sponge moves, metres per second: over frames a track was not seen
+        in, its gate grows by its size per frame but at most by this speed (a still thing
+        whose blob the background took away would otherwise take over a candidate far
+        away).
     max_size_variation : float
         Largest coefficient of variation of a moving object's size over the window: a sponge
         keeps its size as it moves, a still thing that an arm passing over half hides seems
@@ -306,6 +311,7 @@ class AcquisitionParams:
     static_frames: int = 60
     gate: float = 1.0
     gate_floor: float = 0.05
+    max_speed: float = 2.5
     max_size_variation: float = 0.25
     fps: float = 30.0
     periods: tuple[float, float] = (0.3, 2.2)
@@ -337,7 +343,9 @@ class CandidateTracks:
                 break
             distances = [np.linalg.norm(candidates[i].point - track.last_point) for i in free]
             best = int(np.argmin(distances))
-            gate = p.gate_floor + p.gate * track.size * max(1, frame - track.frames[-1])
+            unseen = max(1, frame - track.frames[-1])
+            gate = p.gate_floor + p.gate * track.size * min(
+                unseen, 1 + p.max_speed * (unseen - 1) / (p.fps * p.gate * track.size))
             if distances[best] <= gate:
                 track.add(frame, candidates[free.pop(best)])
         for i in free:
