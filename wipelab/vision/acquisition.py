@@ -344,8 +344,8 @@ class CandidateTracks:
             distances = [np.linalg.norm(candidates[i].point - track.last_point) for i in free]
             best = int(np.argmin(distances))
             unseen = max(1, frame - track.frames[-1])
-            gate = p.gate_floor + p.gate * track.size * min(
-                unseen, 1 + p.max_speed * (unseen - 1) / (p.fps * p.gate * track.size))
+            gate = p.gate_floor + min(p.gate * track.size * unseen,
+                                      p.gate * track.size + p.max_speed * (unseen - 1) / p.fps)
             if distances[best] <= gate:
                 track.add(frame, candidates[free.pop(best)])
         for i in free:
