@@ -28,12 +28,14 @@ from wipelab.vision.tracker import SpongeTracker
 SEEDS = (4, 5, 7)
 
 
-def _render(path: Path, seed: int, *options: str) -> Path:
-    """A small scene, rendered in a fresh process: rendered in this one, after hundreds of
-    other tests, one camera's video has differed from run to run (the cause is not found),
-    and with it seed 5's shape RMS (4.66 mm as a fresh process renders it, 5.30 mm once)."""
+def _render(path: Path, seed: int, *options: str, small: bool = True) -> Path:
+    """A scene (small unless ``small`` is False), rendered in a fresh process: rendered in
+    this one, after hundreds of other tests, one camera's video has differed from run to run
+    (the cause is not found), and with it seed 5's shape RMS (4.66 mm as a fresh process
+    renders it, 5.30 mm once)."""
     subprocess.run([sys.executable, "-m", "tests.stereo_scenes", str(path), "--seed",
-                    str(seed), "--small", *options], check=True, capture_output=True,
+                    str(seed), *(["--small"] if small else []), *options], check=True,
+                   capture_output=True,
                    cwd=Path(__file__).resolve().parents[2])
     return path
 
@@ -160,13 +162,9 @@ def test_followed_backwards_from_a_later_frame_the_sponge_is_where_it_was(scenes
 TABLE_OF_ITS_COLOUR = (838, 916)
 
 
-@pytest.mark.parametrize("seed", TABLE_OF_ITS_COLOUR)
-def test_a_table_of_the_sponges_named_colour_is_not_learnt_as_the_sponge(tmp_path, seed):
-    """The sponge's colour is learnt from what moves: the table it lies on is of the named
-    colour too, but still, and its shade is what the sponge is not. (Learnt from the
-    sponge's region with the table in it, the model took the table in: 838 was valid in a
-    tenth of its visible frames, 916 in 44 % and 33 mm off.)"""
-    scene = _render(tmp_path / f"s{seed}", seed, "--duration", "12")
+def _tracked_with_the_table_not_its_colour(scene: Path):
+    """Track ``scene`` (a table of the sponge's named colour) and check that the colour
+    learnt as the sponge's does not take in the table's: (truth points, seen, valid, poses)."""
     points, seen, colour, _ = _truth(scene)
     demo = open_demo(scene)
     tracker = SpongeTracker(demo.calibration, ColourSource(name=colour))
@@ -174,10 +172,20 @@ def test_a_table_of_the_sponges_named_colour_is_not_learnt_as_the_sponge(tmp_pat
     table_hsv = json.loads((scene / "scene.json").read_text())["table"]["hsv"]
     table = cv2.cvtColor(np.full((4, 4, 3), np.round(table_hsv), np.uint8), cv2.COLOR_HSV2BGR)
     assert tracker.region.model.back_project(table).max() < 0.5
-    valid = result.valid
+    return points, seen, result.valid, result.poses
+
+
+@pytest.mark.parametrize("seed", TABLE_OF_ITS_COLOUR)
+def test_a_table_of_the_sponges_named_colour_is_not_learnt_as_the_sponge(tmp_path, seed):
+    """The sponge's colour is learnt from what moves: the table it lies on is of the named
+    colour too, but still, and its shade is what the sponge is not. (Learnt from the
+    sponge's region with the table in it, the model took the table in: 838 was valid in a
+    tenth of its visible frames, 916 in 44 % and 33 mm off.)"""
+    scene = _render(tmp_path / f"s{seed}", seed, "--duration", "12")
+    points, seen, valid, poses = _tracked_with_the_table_not_its_colour(scene)
     assert not valid[seen.max(axis=1) == 0].any()
     assert valid[seen.min(axis=1) >= 0.999].mean() > 0.75
-    error = result.poses[valid, :3] - points[valid]
+    error = poses[valid, :3] - points[valid]
     assert np.sqrt(np.mean(np.sum((error - error.mean(axis=0)) ** 2, axis=1))) < 0.010
 
 
@@ -225,3 +233,24 @@ def test_a_cloth_of_the_sponges_colour_under_the_path_is_never_reported_as_the_s
     assert not valid[seen.max(axis=1) == 0].any()
     assert valid[seen.min(axis=1) >= 0.999].mean() > 0.75
     assert np.sqrt(np.mean(np.sum((error - error.mean(axis=0)) ** 2, axis=1))) < 0.006
+
+
+def test_a_piece_of_a_table_of_the_named_colour_that_moves_with_the_arm_is_not_the_sponge(
+        tmp_path):
+    """Development scene 2386 as a far camera pair films it (1280x720, 1.6 m): a yellow sponge
+    on a wooden table whose every shade is of the named yellow. Two seconds in, the table
+    where the arm had lain was not yet known as still, moved with the arm and was found
+    first; its colour, learnt as the sponge's, read two thirds of the still table round it
+    as the sponge, and the track never recovered (82 % of visible frames invalid, 107 mm
+    shape RMS by the command). A model that reads half of the still scene as the sponge was
+    learnt from the scene: that candidate is refused and the sponge found next (6.5 mm, 9 %
+    invalid)."""
+    scene = _render(tmp_path / "s2386", 2386, "--duration", "30", "--set", "colour=yellow",
+                    "--set", "table_texture=wood", "--set", "image_size=[1280,720]",
+                    "--set", "distance=1.59", "--set", "elevation_deg=58", "--set",
+                    "baseline=0.23", "--set", "codec=h264", small=False)
+    points, seen, valid, poses = _tracked_with_the_table_not_its_colour(scene)
+    assert not valid[seen.max(axis=1) == 0].any()
+    assert valid[seen.min(axis=1) >= 0.999].mean() > 0.8
+    error = poses[valid, :3] - points[valid]
+    assert np.sqrt(np.mean(np.sum((error - error.mean(axis=0)) ** 2, axis=1))) < 0.010

@@ -74,8 +74,15 @@ SPONGE_HUE_ROUNDS = 3
 #: sponge (the backgrounds' median, :data:`SPAN_CHECK_REACH` around it) of its colour: a
 #: table whose hue lies next to the sponge's, which the sponge's own pixels reach into.
 SPAN_SURROUNDINGS = 0.05
-#: Half side of the square around the sponge that :data:`SPAN_SURROUNDINGS` looks at, metres.
+#: Half side of the square around the sponge that :data:`SPAN_SURROUNDINGS` and
+#: :data:`SCENE_SHARE` look at, metres.
 SPAN_CHECK_REACH = 2 * LARGEST_SPONGE
+#: A colour model learnt from an identified candidate that reads more than this share of the
+#: still scene around it (the backgrounds' median) as the sponge learnt the scene's colour: the
+#: candidate was a piece of a table of the named colour (where the arm has been lying, the
+#: background has not yet learnt the table), not a sponge. A sponge's model, learnt against
+#: its window, reads at most a quarter of any scene as itself (a cloth of its colour there).
+SCENE_SHARE = 0.5
 #: The plane the sponge's point moves in lies at most this far under the table's, metres:
 #: the sponge's stereo points and the table's dense stereo each miss by a centimetre or two.
 PLANE_BELOW_TABLE = 0.03
@@ -520,8 +527,6 @@ class RegionTracker:
             self.size = self.model = None
             self.spanned, self.prior = searched
             return False
-        for recent in self._recent:
-            recent.clear()
         point = triangulate_rays(rays[0][None], rays[1][None], self.calibration.R,
                                  self.calibration.T)[0][0]
         self.size = float(np.sqrt(np.mean(areas)))
@@ -531,6 +536,13 @@ class RegionTracker:
         # duller hand, the sponge's shaded sides) is neither sponge nor background
         self.model = self._colour(windows, [vivid_part(window, core) for window, core
                                             in zip(windows, cores)], masks, unsure=masks)
+        if self._scene_share(self.model, point) > SCENE_SHARE:
+            self.candidates.rejected.add(track.ident)
+            self.size = self.model = self.body_model = None
+            self.spanned, self.prior = searched
+            return False
+        for recent in self._recent:
+            recent.clear()
         self.history.append((self.frame - 1, point.copy()))
         self.seed_windows, self.seed_masks = windows, masks
         self._track_start = self.frame
@@ -561,16 +573,23 @@ class RegionTracker:
     def _takes_in_the_scene(self, prior: ColourModel, point: np.ndarray) -> bool:
         """Whether ``prior`` reads more of the still scene around ``point`` (the backgrounds'
         median) as the sponge's colour than the prior so far, by :data:`SPAN_SURROUNDINGS`."""
-        gained = total = 0
+        scene = self._still_scene(point)
+        gained = np.count_nonzero(prior.likely(scene) & ~self.prior.likely(scene))
+        return gained > SPAN_SURROUNDINGS * max(len(scene), 1)
+
+    def _scene_share(self, model: ColourModel, point: np.ndarray) -> float:
+        """The share of the still scene around ``point`` that ``model`` reads as the sponge."""
+        scene = self._still_scene(point)
+        return float(np.count_nonzero(model.likely(scene))) / max(len(scene), 1)
+
+    def _still_scene(self, point: np.ndarray) -> np.ndarray:
+        """Both backgrounds' median within :data:`SPAN_CHECK_REACH` of ``point``: HSV uint8,
+        (k, 1, 3), an image one pixel wide."""
+        scenes = []
         for view, background in zip(self.views, self.backgrounds):
             reach = SPAN_CHECK_REACH * view.focal / max(view.depth(point), 1e-3)
-            scene = background.median_near(view.pixel(point), reach)
-            if not len(scene):
-                continue
-            hsv = cv2.cvtColor(scene, cv2.COLOR_BGR2HSV)
-            gained += int(np.count_nonzero(prior.likely(hsv) & ~self.prior.likely(hsv)))
-            total += len(scene)
-        return gained > SPAN_SURROUNDINGS * max(total, 1)
+            scenes.append(background.median_near(view.pixel(point), reach))
+        return cv2.cvtColor(np.concatenate(scenes), cv2.COLOR_BGR2HSV)
 
     def _seed_regions(self, frames, point: np.ndarray):
         """The sponge's pixels at ``point`` in both cameras, by the prior: (windows (BGR),
