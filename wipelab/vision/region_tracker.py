@@ -574,22 +574,25 @@ class RegionTracker:
         """Whether ``prior`` reads more of the still scene around ``point`` (the backgrounds'
         median) as the sponge's colour than the prior so far, by :data:`SPAN_SURROUNDINGS`."""
         scene = self._still_scene(point)
+        if not len(scene):
+            return False
         gained = np.count_nonzero(prior.likely(scene) & ~self.prior.likely(scene))
-        return gained > SPAN_SURROUNDINGS * max(len(scene), 1)
+        return gained > SPAN_SURROUNDINGS * len(scene)
 
     def _scene_share(self, model: ColourModel, point: np.ndarray) -> float:
         """The share of the still scene around ``point`` that ``model`` reads as the sponge."""
         scene = self._still_scene(point)
-        return float(np.count_nonzero(model.likely(scene))) / max(len(scene), 1)
+        return float(np.count_nonzero(model.likely(scene))) / len(scene) if len(scene) else 0.0
 
     def _still_scene(self, point: np.ndarray) -> np.ndarray:
         """Both backgrounds' median within :data:`SPAN_CHECK_REACH` of ``point``: HSV uint8,
-        (k, 1, 3), an image one pixel wide."""
+        (k, 1, 3), an image one pixel wide (k may be 0: the point out of both views)."""
         scenes = []
         for view, background in zip(self.views, self.backgrounds):
             reach = SPAN_CHECK_REACH * view.focal / max(view.depth(point), 1e-3)
             scenes.append(background.median_near(view.pixel(point), reach))
-        return cv2.cvtColor(np.concatenate(scenes), cv2.COLOR_BGR2HSV)
+        scene = np.concatenate(scenes)
+        return cv2.cvtColor(scene, cv2.COLOR_BGR2HSV) if len(scene) else scene
 
     def _seed_regions(self, frames, point: np.ndarray):
         """The sponge's pixels at ``point`` in both cameras, by the prior: (windows (BGR),
