@@ -524,9 +524,7 @@ class RegionTracker:
         if len(rays) < 2:
             self.candidates.static[track.ident] = (track.last_point.copy(), track.size)
             self.candidates.tracks = [t for t in self.candidates.tracks if t is not track]
-            self.size = self.model = None
-            self.spanned, self.prior = searched
-            return False
+            return self._not_identified(searched)
         point = triangulate_rays(rays[0][None], rays[1][None], self.calibration.R,
                                  self.calibration.T)[0][0]
         self.size = float(np.sqrt(np.mean(areas)))
@@ -538,9 +536,7 @@ class RegionTracker:
                                             in zip(windows, cores)], masks, unsure=masks)
         if self._scene_share(self.model, point) > SCENE_SHARE:
             self.candidates.rejected.add(track.ident)
-            self.size = self.model = self.body_model = None
-            self.spanned, self.prior = searched
-            return False
+            return self._not_identified(searched)
         for recent in self._recent:
             recent.clear()
         self.history.append((self.frame - 1, point.copy()))
@@ -549,6 +545,13 @@ class RegionTracker:
         self._table_centre = point.copy()
         self._measure_table(None if self._table_points else frames)
         return True
+
+    def _not_identified(self, searched) -> bool:
+        """Undo what an identification learnt: no size or model, and the colour range and
+        prior it searched with (``searched``); False."""
+        self.size = self.model = self.body_model = None
+        self.spanned, self.prior = searched
+        return False
 
     def _span_the_named_colour(self, frames, point: np.ndarray) -> None:
         """The prior becomes the named colour as the sponge at ``point`` shows it: a sponge
