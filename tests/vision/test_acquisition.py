@@ -58,12 +58,12 @@ def test_a_blob_pair_that_breaks_the_epipolar_geometry_is_no_candidate():
     assert found == []
 
 
-def _candidate(point, size):
+def _candidate(point, size, vivid_size=None):
     b = Blob(np.zeros(2), 1.0, (0, 0, 1, 1), np.zeros((1, 1, 2), np.int32), 1)
     point = np.asarray(point, float)
     right = point + T
     return StereoCandidate(point, size, (b, b), 0.0, np.stack([point / point[2],
-                                                               right / right[2]]))
+                                                               right / right[2]]), vivid_size)
 
 
 def test_the_moving_object_is_picked_and_the_still_one_remembered_as_static():
@@ -79,6 +79,23 @@ def test_the_moving_object_is_picked_and_the_still_one_remembered_as_static():
     assert moving is not None and abs(moving.size - 0.09) < 1e-9
     assert tracks.is_static(cloth + 0.01, 0.28)
     assert not tracks.is_static(np.array([0.1, 0.1, 0.8]), 0.09)
+
+
+def test_a_sponge_whose_blob_takes_in_a_table_of_its_hue_keeps_its_vivid_size():
+    # every other third of a second the blob takes in a strip of a wooden table of the
+    # sponge's hue and doubles its size; its vivid part stays the sponge's
+    def follow(vivid):
+        tracks = CandidateTracks()
+        for frame in range(90):
+            phase = 2 * np.pi * frame / 30.0
+            sponge = np.array([0.1 * np.cos(phase), 0.1, 0.8])
+            size = 0.18 if (frame // 10) % 2 else 0.09
+            tracks.update(frame, [_candidate(sponge, size, 0.09 if vivid else None)])
+        return tracks.moving(89)
+
+    assert follow(vivid=False) is None  # sizes 0.09 and 0.18: it does not keep its size
+    picked = follow(vivid=True)
+    assert picked is not None and abs(picked.size - 0.135) < 0.05
 
 
 def test_two_still_things_paired_now_one_way_now_the_other_do_not_move():

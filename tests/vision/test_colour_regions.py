@@ -7,7 +7,8 @@ import numpy as np
 
 from wipelab.vision.colour_model import NAMED_COLOURS
 from wipelab.vision.colour_regions import (blob_mask, find_blobs, hue_range, prior_model,
-                                           region_moments, spanning_hues, widened_hues)
+                                           region_moments, spanning_hues, vivid_area,
+                                           widened_hues)
 
 
 def _bgr(h, s, v):
@@ -96,3 +97,23 @@ def test_blob_centroid_is_sub_pixel_and_regions_are_separated():
     assert np.linalg.norm(centroid - expected) < 0.02
     assert abs(mass - np.pi * 12 ** 2) < 0.01 * np.pi * 12 ** 2
     assert elongation < 1.05
+
+
+def test_the_vivid_area_of_a_blob_that_took_in_a_dull_table_of_its_hue_is_the_sponges():
+    # an orange sponge (H 13, S 230, V 215) lying against a strip of orange wood (H 14,
+    # S 150, V 150) that the named colour also takes in: one blob of both
+    rng = np.random.default_rng(4)
+    image = np.zeros((60, 90, 3), np.uint8)
+    image[20:40, 10:40] = _bgr(13, 230, 215)
+    image[24:36, 40:80] = _bgr(14, 150, 150)
+    image = np.clip(image + rng.normal(0, 3, image.shape), 0, 255).astype(np.uint8)
+    probability = np.zeros((60, 90), np.float32)
+    probability[20:40, 10:40] = probability[24:36, 40:80] = 1.0
+    (both,) = find_blobs(probability, min_area=20)
+    assert both.area > 1000
+    assert vivid_area(image, probability, both) == 600
+    # a blob of one colour group: all of its pixels
+    alone = probability.copy()
+    alone[24:36, 40:80] = 0.0
+    (body,) = find_blobs(alone, min_area=20)
+    assert vivid_area(image, alone, body) == 600

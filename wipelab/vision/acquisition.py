@@ -47,6 +47,9 @@ class StereoCandidate:
         Larger reprojection error of the triangulated centre, full-resolution pixels.
     rays : ndarray, shape (2, 3)
         The blobs' viewing rays (x, y, 1) in the left and right camera.
+    vivid_size : float or None
+        ``size`` of the blobs' vivid parts (:attr:`Blob.vivid_pixels`, where measured; else
+        the blobs'); None: ``size``.
     """
 
     point: np.ndarray
@@ -54,6 +57,7 @@ class StereoCandidate:
     blobs: tuple[Blob, Blob]
     epipolar_error: float
     rays: np.ndarray = field(default_factory=lambda: np.full((2, 3), np.nan))
+    vivid_size: float | None = None
 
 
 def triangulate_rays(ray_left: np.ndarray, ray_right: np.ndarray, R: np.ndarray,
@@ -152,9 +156,12 @@ def stereo_candidates(blobs_left: list[Blob], blobs_right: list[Blob],
             continue
         if max(size_left, size_right) > 2.0 * min(size_left, size_right):
             continue
+        vivid_size = 0.5 * sum(size * np.sqrt(blob.area if blob.vivid_pixels is None
+                                              else blob.vivid_pixels) / np.sqrt(blob.area)
+                               for size, blob in ((size_left, left), (size_right, right)))
         candidates.append(StereoCandidate(points[k], 0.5 * (size_left + size_right),
                                           (left, right), float(error[k]),
-                                          np.stack([rays_left[i], rays_right[j]])))
+                                          np.stack([rays_left[i], rays_right[j]]), vivid_size))
     # each blob in one pair at most, the best agreeing pairs first
     used_left, used_right, chosen = set(), set(), []
     for candidate in candidates:
@@ -182,6 +189,9 @@ class CandidateTrack:
     points : deque of ndarray
         Its 3D centre in those frames.
     sizes : deque of float
+    vivid_sizes : deque of float
+        Its sizes as its blobs' vivid parts show them (its sizes where not measured): the
+        sponge's alone when its blob takes in a table of its hue now and then.
     rays : deque of ndarray
         Its viewing rays (2, 3) in the two cameras.
     first_frame : int
@@ -192,6 +202,7 @@ class CandidateTrack:
     frames: deque = field(default_factory=lambda: deque(maxlen=300))
     points: deque = field(default_factory=lambda: deque(maxlen=300))
     sizes: deque = field(default_factory=lambda: deque(maxlen=300))
+    vivid_sizes: deque = field(default_factory=lambda: deque(maxlen=300))
     rays: deque = field(default_factory=lambda: deque(maxlen=300))
     first_frame: int = 0
     ident: int = field(default_factory=itertools.count().__next__)
@@ -200,6 +211,8 @@ class CandidateTrack:
         self.frames.append(frame)
         self.points.append(np.asarray(candidate.point, dtype=np.float64))
         self.sizes.append(candidate.size)
+        self.vivid_sizes.append(candidate.size if candidate.vivid_size is None
+                                else candidate.vivid_size)
         self.rays.append(np.asarray(candidate.rays, dtype=np.float64))
 
     @property
@@ -290,9 +303,10 @@ class AcquisitionParams:
         whose blob the background took away would otherwise take over a candidate far
         away).
     max_size_variation : float
-        Largest coefficient of variation of a moving object's size over the window: a sponge
-        keeps its size as it moves, a still thing that an arm passing over half hides seems
-        to move while it shrinks and grows.
+        Largest coefficient of variation of a moving object's size (of its blobs' vivid
+        parts, :attr:`CandidateTrack.vivid_sizes`) over the window: a sponge keeps its size
+        as it moves, a still thing that an arm passing over half hides seems to move while
+        it shrinks and grows.
     fps : float
         Frame rate of the video, frames per second.
     periods : tuple of float
@@ -390,7 +404,7 @@ class CandidateTracks:
             seen = sum(1 for f in track.frames if frame - f < p.window)
             if seen < p.min_presence:
                 continue
-            sizes = np.array([s for f, s in zip(track.frames, track.sizes)
+            sizes = np.array([s for f, s in zip(track.frames, track.vivid_sizes)
                               if frame - f < p.window])
             if sizes.std() > p.max_size_variation * sizes.mean():
                 continue

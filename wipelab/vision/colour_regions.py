@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from wipelab.vision.colour_model import H_BINS, S_BINS, ColourModel, HsvRange
+from wipelab.vision.colour_model import H_BINS, S_BINS, ColourModel, HsvRange, vivid_part
 
 #: Width of the prior's fall-off outside the named box: hue (OpenCV units, 0-179) and
 #: saturation (0-255).
@@ -120,6 +120,8 @@ class Blob:
         The outline, int32 pixel coordinates (OpenCV contour).
     label : int
         Its index in the list :func:`find_blobs` returned.
+    vivid_pixels : float or None
+        Pixels of its vivid part (:func:`vivid_area`), where that was measured.
     """
 
     centroid: np.ndarray
@@ -127,6 +129,7 @@ class Blob:
     bbox: tuple[int, int, int, int]
     outline: np.ndarray
     label: int
+    vivid_pixels: float | None = None
 
     @property
     def radius(self) -> float:
@@ -156,6 +159,18 @@ def find_blobs(probability: np.ndarray, min_area: float, threshold: float = 0.5,
     found.sort(key=lambda item: -item[0])
     return [Blob(centroid, float(area), bbox, outline, k)
             for k, (area, centroid, bbox, outline) in enumerate(found)]
+
+
+def vivid_area(image: np.ndarray, probability: np.ndarray, blob: Blob,
+               threshold: float = 0.5) -> float:
+    """Pixels of the blob's vivid part (:func:`vivid_part` of its pixels above ``threshold``
+    in ``image``, BGR): the sponge's area when its region took in a duller thing of a near
+    hue next to it (a wooden table), the blob's pixels when it holds one colour group."""
+    x0, y0, x1, y1 = blob.bbox
+    inside = np.zeros((y1 - y0, x1 - x0), np.uint8)
+    cv2.drawContours(inside, [blob.outline], -1, 255, thickness=-1, offset=(-x0, -y0))
+    inside[probability[y0:y1, x0:x1] <= threshold] = 0
+    return float(np.count_nonzero(vivid_part(image[y0:y1, x0:x1], inside)))
 
 
 def blob_mask(probability: np.ndarray, blobs: list[Blob], grow: int = 1,

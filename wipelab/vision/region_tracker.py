@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from concurrent.futures import Future, ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable, TypeVar
 
 import cv2
@@ -41,7 +41,7 @@ from wipelab.vision.calibration import StereoCalibration
 from wipelab.vision.colour_model import ColourModel, ColourSource, vivid_part
 from wipelab.vision.colour_regions import (blob_mask, find_blobs, hue_centre, hue_range,
                                            prior_model, region_moments, spanning_hues,
-                                           widened_hues)
+                                           vivid_area, widened_hues)
 from wipelab.vision.projection import invert_transform
 from wipelab.vision.static_background import StaticBackground
 from wipelab.vision.table_plane import Plane, fit_plane, points_on_plane
@@ -81,8 +81,18 @@ SPAN_CHECK_REACH = 2 * LARGEST_SPONGE
 #: still scene around it (the backgrounds' median) as the sponge learnt the scene's colour: the
 #: candidate was a piece of a table of the named colour (where the arm has been lying, the
 #: background has not yet learnt the table), not a sponge. A sponge's model, learnt against
-#: its window, reads at most a quarter of any scene as itself (a cloth of its colour there).
-SCENE_SHARE = 0.5
+#: its window, reads at most a quarter of any scene as itself (a cloth of its colour there);
+#: such pieces of table read 0.43 to 0.65.
+SCENE_SHARE = 0.35
+#: A camera whose still scene is of the sponge's colour over more than this share of its view
+#: sees a table of a near hue: where the arm lay while the background was learnt, the table
+#: is not yet known as still and merges with the sponge's blob, which then grows and shrinks
+#: as the arm moves. While the sponge is searched for, a blob's vivid part there
+#: (:func:`~wipelab.vision.colour_regions.vivid_area`), the sponge's, tells whether its size
+#: stays as a sponge's does (:attr:`~wipelab.vision.acquisition.CandidateTrack.vivid_sizes`);
+#: its centre and size stay the whole blob's, which both cameras see alike. A cloth or a
+#: plate of the colour covers a few hundredths of the view.
+TABLE_OF_THE_COLOUR = 0.1
 #: The plane the sponge's point moves in lies at most this far under the table's, metres:
 #: the sponge's stereo points and the table's dense stereo each miss by a centimetre or two.
 PLANE_BELOW_TABLE = 0.03
@@ -426,12 +436,14 @@ class RegionTracker:
         self.prior = ColourModel.fit([frames[0]], [roi])
         return True
 
-    def _search_candidates(self, frames, model: ColourModel, images=None, probabilities=None
-                           ) -> list[StereoCandidate]:
+    def _search_candidates(self, frames, model: ColourModel, images=None, probabilities=None,
+                           vivid: bool = False) -> list[StereoCandidate]:
         """Stereo candidates of the sponge's colour anywhere in both images, found in the
         backgrounds' low-resolution undistorted canvases (``images``, or resampled from
         ``frames``; ``probabilities``: their back-projections, when already made), without
-        the still things of its colour the backgrounds know."""
+        the still things of its colour the backgrounds know. ``vivid``: in a camera whose
+        still scene is of the colour widely (:data:`TABLE_OF_THE_COLOUR`), the blobs' vivid
+        parts are measured too."""
         if images is None:
             images = [background.canvas_image(frame)
                       for background, frame in zip(self.backgrounds, frames)]
@@ -445,6 +457,9 @@ class RegionTracker:
                 probability[still] = 0.0
             scale = background.scale
             found = find_blobs(probability, min_area=max(6.0, 15.0 * scale * scale))[:12]
+            if vivid and background.coloured_share > TABLE_OF_THE_COLOUR:
+                found = [replace(blob, vivid_pixels=vivid_area(image, probability, blob))
+                         for blob in found]
             blobs.append(found)
             centres = background.canvas_pixels([b.centroid for b in found]).reshape(-1, 2)
             rays.append(view.rays_of_pixels(centres))
@@ -465,7 +480,7 @@ class RegionTracker:
             # not a stall of a live session
             camera = (self.frame // BACKGROUND_REFRESH_FRAMES) % 2
             self._learn_backgrounds(cameras=(camera,), frames=BACKGROUND_FRAMES)
-        candidates = self._search_candidates(frames, model, images, probabilities)
+        candidates = self._search_candidates(frames, model, images, probabilities, vivid=True)
         self.frames_with_candidates += bool(candidates)
         self.candidates.update(self.frame, candidates)
         return self.candidates.moving(self.frame)

@@ -221,6 +221,11 @@ class StaticBackground:
         self._classify()
 
     @property
+    def coloured_share(self) -> float:
+        """Share of the pixels that see the frame whose median is of the sponge's colour."""
+        return float(np.count_nonzero(self.coloured)) / max(1, np.count_nonzero(self.in_frame))
+
+    @property
     def appearance(self) -> np.ndarray:
         """How the still things look, BGR uint8: until the sponge is tracked, as the scene
         first looked (:attr:`first`), then the median."""
