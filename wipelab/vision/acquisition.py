@@ -156,9 +156,8 @@ def stereo_candidates(blobs_left: list[Blob], blobs_right: list[Blob],
             continue
         if max(size_left, size_right) > 2.0 * min(size_left, size_right):
             continue
-        vivid_size = 0.5 * sum(size * np.sqrt(blob.area if blob.vivid_pixels is None
-                                              else blob.vivid_pixels) / np.sqrt(blob.area)
-                               for size, blob in ((size_left, left), (size_right, right)))
+        vivid_size = 0.5 * (np.sqrt(left.vivid_or_whole_area) / scale * depth_left / focal[0]
+                            + np.sqrt(right.vivid_or_whole_area) / scale * depth_right / focal[1])
         candidates.append(StereoCandidate(points[k], 0.5 * (size_left + size_right),
                                           (left, right), float(error[k]),
                                           np.stack([rays_left[i], rays_right[j]]), vivid_size))

@@ -132,6 +132,11 @@ class Blob:
     vivid_pixels: float | None = None
 
     @property
+    def vivid_or_whole_area(self) -> float:
+        """Pixels of its vivid part where measured, else :attr:`area`."""
+        return self.area if self.vivid_pixels is None else self.vivid_pixels
+
+    @property
     def radius(self) -> float:
         """Radius of a disc of the same area, pixels."""
         return float(np.sqrt(self.area / np.pi))

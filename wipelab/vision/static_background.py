@@ -96,6 +96,7 @@ class StaticBackground:
         frame_width, frame_height = undistorter.frame_size
         self.in_frame = ((map_u >= 0) & (map_v >= 0) & (map_u <= frame_width - 1)
                          & (map_v <= frame_height - 1))
+        self._in_frame_pixels = int(np.count_nonzero(self.in_frame))
         self._steps = (step * self.in_frame).astype(np.float32)  # per update and pixel
         self.image = np.zeros(shape + (3,), np.float32)  # median appearance, BGR
         self.coloured = np.zeros(shape, bool)  # the median is of the sponge's colour
@@ -223,7 +224,7 @@ class StaticBackground:
     @property
     def coloured_share(self) -> float:
         """Share of the pixels that see the frame whose median is of the sponge's colour."""
-        return float(np.count_nonzero(self.coloured)) / max(1, np.count_nonzero(self.in_frame))
+        return float(np.count_nonzero(self.coloured)) / max(1, self._in_frame_pixels)
 
     @property
     def appearance(self) -> np.ndarray:
